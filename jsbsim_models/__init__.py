@@ -1,0 +1,1 @@
+"""silbridge.jsbsim_models"""

@@ -1,0 +1,1 @@
+"""silbridge.mavlink"""

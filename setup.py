@@ -1,0 +1,50 @@
+"""C extensions of silbridge, built by the package build itself.
+
+Each extension is listed with its explicit sources (as Crazyflie's Python
+bindings do), so what is compiled is visible here; an extension whose
+sources are not present yet is skipped, never half-built.
+"""
+
+import glob
+import os
+
+import numpy
+from setuptools import Extension, setup
+
+CFLAGS = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wno-missing-field-initializers"]
+
+
+def sources(*patterns):
+    out = []
+    for pattern in patterns:
+        out.extend(sorted(glob.glob(pattern)))
+    return out
+
+
+extensions = []
+
+ring_src = sources("shm/src/*.c")
+if ring_src:
+    extensions.append(
+        Extension(
+            "silbridge.shm._ring",
+            ring_src,
+            include_dirs=["shm/include", numpy.get_include()],
+            extra_compile_args=CFLAGS,
+            libraries=["rt"],
+        )
+    )
+
+core_src = sources("fc_sil/core/*.c", "fc_sil/ext/*.c")
+if core_src:
+    extensions.append(
+        Extension(
+            "silbridge.fc_sil._core",
+            core_src,
+            include_dirs=["fc_sil/core", "shm/include", numpy.get_include()],
+            extra_compile_args=CFLAGS,
+            libraries=["m"],
+        )
+    )
+
+setup(ext_modules=extensions)

@@ -1,0 +1,5 @@
+import sys
+
+from silbridge.tools.cli import main
+
+sys.exit(main())
