@@ -47,4 +47,10 @@ if core_src:
         )
     )
 
+# SILBRIDGE_EXT=ring (or core) builds one extension only: handy while another
+# extension's sources are mid-edit (`SILBRIDGE_EXT=ring python setup.py build_ext --inplace`).
+only = os.environ.get("SILBRIDGE_EXT")
+if only:
+    extensions = [e for e in extensions if e.name.rsplit(".", 1)[-1].lstrip("_") == only]
+
 setup(ext_modules=extensions)
