@@ -30,6 +30,7 @@ if ring_src:
             "silbridge.shm._ring",
             ring_src,
             include_dirs=["shm/include", numpy.get_include()],
+            depends=sources("shm/include/*.h", "shm/src/*.h"),  # rebuild on header edits
             extra_compile_args=CFLAGS,
             libraries=["rt"],
         )
@@ -42,6 +43,8 @@ if core_src:
             "silbridge.fc_sil._core",
             core_src,
             include_dirs=["fc_sil/core", "shm/include", numpy.get_include()],
+            depends=sources("fc_sil/core/*.h", "fc_sil/core/*.def", "fc_sil/ext/*.h",
+                            "shm/include/*.h"),  # rebuild on header / parameter edits
             extra_compile_args=CFLAGS,
             libraries=["m"],
         )

@@ -1,0 +1,67 @@
+"""Micro-benchmark of Simulator.step: microseconds per physics step at several IMU rates.
+
+    python -m silbridge.bridge.bench [--imu 1000 8000 32000] [--steps 4000] [--json]
+
+The vehicle starts 20 m up with its motors at the open-loop hover PWM (the
+airborne case: AB4 integrators, no ground contact), scenario S1 sensors. Each
+figure is the best of `--reps` timed runs of `--steps` steps, timed with the
+thread's CPU clock (time.thread_time), so other processes competing for the
+cores do not inflate it; JSBSim's run() alone on the same state is timed the
+same way for reference. Bounded: at most reps x steps steps per rate.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+from silbridge.bridge.scenario import load_scenario
+from silbridge.bridge.simulator import Simulator
+
+
+def bench(imu_hz: int, steps: int, reps: int, scenario: str = "S1") -> dict:
+    sc = load_scenario(scenario, overrides={"home.initial_agl_m": 20.0})
+    sim = Simulator(sc, imu_hz=imu_hz)
+    pwm = [sim.hover_pwm_us] * 4
+    for _ in range(200):        # motors spin up, integrator switches to air
+        sim.step(pwm)
+    best = float("inf")
+    step = sim.step
+    for _ in range(reps):
+        t0 = time.thread_time()
+        for _ in range(steps):
+            step(pwm)
+        best = min(best, (time.thread_time() - t0) / steps)
+    run = sim.fdm.fdm.run
+    best_run = float("inf")
+    for _ in range(reps):
+        t0 = time.thread_time()
+        for _ in range(steps):
+            run()
+        best_run = min(best_run, (time.thread_time() - t0) / steps)
+    return {"imu_hz": imu_hz, "us_per_step": best * 1e6, "jsbsim_run_us": best_run * 1e6,
+            "bridge_overhead_us": (best - best_run) * 1e6,
+            "realtime_factor": sim.dt_s / best, "imu_samples_per_s": imu_hz * sim.dt_s / best}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--imu", type=int, nargs="+", default=[1000, 8000, 32000])
+    ap.add_argument("--steps", type=int, default=4000)
+    ap.add_argument("--reps", type=int, default=5)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args(argv)
+    rows = [bench(hz, args.steps, args.reps) for hz in args.imu]
+    if args.json:
+        print(json.dumps({"bench": "bridge.step", "results": rows}))
+    else:
+        print(f"{'imu_hz':>8} {'us/step':>9} {'run() us':>9} {'bridge us':>10} {'x realtime':>11}")
+        for r in rows:
+            print(f"{r['imu_hz']:>8} {r['us_per_step']:>9.2f} {r['jsbsim_run_us']:>9.2f} "
+                  f"{r['bridge_overhead_us']:>10.2f} {r['realtime_factor']:>11.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

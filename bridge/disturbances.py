@@ -1,0 +1,151 @@
+"""Scripted disturbances: external force, gyro bias, motor thrust bias, wind and turbulence.
+
+Each [[disturbance]] of the scenario switches on before the first physics step
+that starts at or after start_s and off before the first step that starts at
+or after stop_s (default: never). While on:
+- force: F(t) = m g A sin(2 pi f (t - t_on) + phase) along a unit axis in NED
+  or body FRD, at the CG (f = 0: constant m g A). Forces in one frame add up;
+  the bridge writes the summed vector into the JSBSim external force's
+  direction with a 1 N magnitude (JSBSim does not renormalise runtime
+  directions), so any number of them costs three property writes per step.
+- gyro_bias: sign * A * axis added to the IMU's gyro, as a step or a linear
+  ramp over ramp_s; active biases add up.
+- motor_bias: per-motor thrust (and reaction torque) scale; active biases multiply.
+- wind: steady wind (speed, from-direction) plus optional JSBSim Dryden or
+  Tustin turbulence (MIL-F-8785C severity); the last one switched on wins.
+Every switch reports (sim_ns, text) to the simulator's event list.
+"""
+
+from __future__ import annotations
+
+import math
+
+from silbridge.bridge.fdm import G0_M_S2
+from silbridge.bridge.frames import wind_from_to_ned
+
+_TWO_PI = 2.0 * math.pi
+
+
+def step_starting_at(t_s: float, dt_ns: int) -> int:
+    """Index k of the first physics step whose start time (k-1) dt is >= t_s."""
+    t_ns = int(round(t_s * 1e9))
+    return -(-t_ns // dt_ns) + 1
+
+
+class Disturbances:
+    def __init__(self, scenario, fdm, imu, dt_ns: int, on_event):
+        self.fdm = fdm
+        self.imu = imu
+        self.dt_ns = dt_ns
+        self.mass_kg = fdm.mass_kg
+        self.on_event = on_event     # on_event(sim_ns, text)
+        switches = []
+        for i, d in enumerate(scenario.disturbances):
+            switches.append((step_starting_at(d.start_s, dt_ns), 1, i, d))
+            if d.stop_s is not None and d.stop_s < scenario.duration_s:
+                switches.append((step_starting_at(d.stop_s, dt_ns), 0, i, d))
+        # Off before on at the same step, then in file order: deterministic.
+        self._switches = sorted(switches, key=lambda s: (s[0], s[1], s[2]))
+        self._next = 0
+        self.next_step = self._switches[0][0] if self._switches else -1
+        self._active: dict[int, tuple] = {}   # index -> (d, t_on_s)
+        self._forces = False
+        self._ramps = False
+        # Fixed 1 N magnitude; the summed force vector (N) goes into the direction.
+        for frame in ("ned", "frd"):
+            self.fdm.set_dist_force(frame, 1.0, (0.0, 0.0, 0.0))
+
+    @property
+    def continuous(self) -> bool:
+        """True while something must be recomputed every step."""
+        return self._forces or self._ramps
+
+    def switch(self, k: int) -> None:
+        """Apply the switches due before step k (call when k == next_step)."""
+        t_s = (k - 1) * self.dt_ns * 1e-9
+        sim_ns = (k - 1) * self.dt_ns
+        while self._next < len(self._switches) and self._switches[self._next][0] == k:
+            _, on, i, d = self._switches[self._next]
+            self._next += 1
+            if on:
+                self._active[i] = (d, t_s)
+            else:
+                self._active.pop(i, None)
+            self.on_event(sim_ns, f"disturbance[{i}] {d.type} {'on' if on else 'off'}: {describe(d)}")
+            if d.type == "motor_bias":
+                self._apply_motor_bias()
+            elif d.type == "wind":
+                self._apply_wind(i if on else None)
+        self.next_step = (self._switches[self._next][0] if self._next < len(self._switches) else -1)
+        self._forces = any(d.type == "force" for d, _ in self._active.values())
+        self._ramps = any(d.type == "gyro_bias" for d, _ in self._active.values())
+        if not self._forces:
+            for frame in ("ned", "frd"):
+                self.fdm.set_dist_force(frame, 1.0, (0.0, 0.0, 0.0))
+        self.update(k)
+
+    def update(self, k: int) -> None:
+        """Per step while continuous: forces at the step's start time, gyro ramps."""
+        t_s = (k - 1) * self.dt_ns * 1e-9
+        if self._forces:
+            acc = {"ned": [0.0, 0.0, 0.0], "frd": [0.0, 0.0, 0.0]}
+            for d, t_on in self._active.values():
+                if d.type != "force":
+                    continue
+                if d.frequency_hz > 0:
+                    s = math.sin(_TWO_PI * d.frequency_hz * (t_s - t_on) + math.radians(d.phase_deg))
+                else:
+                    s = 1.0
+                f_n = self.mass_kg * G0_M_S2 * d.amplitude_g * s
+                v = acc[d.frame]
+                for j in range(3):
+                    v[j] += f_n * d.axis[j]
+            for frame, v in acc.items():
+                self.fdm.set_dist_force(frame, 1.0, v)
+        gyro = [0.0, 0.0, 0.0]
+        ramping = False
+        for d, t_on in self._active.values():
+            if d.type != "gyro_bias":
+                continue
+            frac = 1.0
+            if d.ramp_s > 0:
+                frac = min(1.0, (t_s - t_on) / d.ramp_s)
+                ramping = ramping or frac < 1.0
+            a = d.sign * d.amplitude_rad_s * frac
+            for j in range(3):
+                gyro[j] += a * d.axis[j]
+        self.imu.set_injected_gyro_bias(gyro)
+        self._ramps = ramping
+
+    def _apply_motor_bias(self) -> None:
+        scale = [1.0, 1.0, 1.0, 1.0]
+        for d, _ in self._active.values():
+            if d.type == "motor_bias":
+                scale = [a * b for a, b in zip(scale, d.thrust_scale)]
+        for i, s in enumerate(scale):
+            self.fdm.set_thrust_scale(i, s)
+
+    def _apply_wind(self, index_on) -> None:
+        winds = [(i, d) for i, (d, _) in self._active.items() if d.type == "wind"]
+        if not winds:
+            self.fdm.set_wind_ned((0.0, 0.0, 0.0))
+            self.fdm.set_turbulence("none", 0.0, 1)
+            return
+        d = dict(winds)[index_on] if index_on is not None else winds[-1][1]
+        self.fdm.set_wind_ned(wind_from_to_ned(d.speed_m_s, d.from_deg))
+        self.fdm.set_turbulence(d.turbulence, d.speed_m_s, d.severity)
+
+
+def describe(d) -> str:
+    if d.type == "force":
+        return (f"{d.amplitude_g:.3f} g at {d.frequency_hz:.3f} Hz along "
+                f"[{d.axis[0]:.2f}, {d.axis[1]:.2f}, {d.axis[2]:.2f}] {d.frame}")
+    if d.type == "gyro_bias":
+        return (f"{d.sign * d.amplitude_rad_s:+.4f} rad/s along "
+                f"[{d.axis[0]:.2f}, {d.axis[1]:.2f}, {d.axis[2]:.2f}] frd"
+                + (f", ramp {d.ramp_s:.2f} s" if d.ramp_s > 0 else ", step"))
+    if d.type == "motor_bias":
+        return "thrust scale " + ", ".join(f"{s:.3f}" for s in d.thrust_scale)
+    return (f"wind {d.speed_m_s:.2f} m/s from {d.from_deg:.0f} deg, turbulence {d.turbulence}"
+            + (f" severity {d.severity}" if d.turbulence != "none" else ""))
+

@@ -1,0 +1,200 @@
+"""JSBSim wrapper: load the quad model quietly, place it at home, and expose the
+property handles the bridge's hot path reads and writes.
+
+Everything JSBSim-specific lives here: the silent logger, the load order
+(set_dt before load_model), initial conditions that put the legs on the
+ground without a bounce, the integrator switch between ground and air, and
+unit conversions out of JSBSim's feet, pounds and slugs. The hot path
+(`Simulator.step`) uses the handle objects directly (``node.get_double_value``,
+~33 ns) instead of name lookups (~0.3-0.5 us), see JSBSIM_NOTES.md section 2.
+
+Handle naming: attributes ``h_*`` are jsbsim property nodes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jsbsim
+
+from silbridge.bridge.errors import SimulatorError
+from silbridge.jsbsim_models import AIRCRAFT_DIR
+
+FT_M = 0.3048            # m per ft
+LBF_N = 4.448222         # N per lbf
+PSF_PA = 47.88026        # Pa per lbf/ft^2
+SLUG_KG = 14.593903      # kg per slug
+G0_M_S2 = 9.80665        # standard gravity
+
+# WGS-84 ellipsoid, for the local NED position around home.
+_WGS84_A_M = 6378137.0
+_WGS84_E2 = 6.69437999014e-3
+
+# Integrator choices (JSBSIM_NOTES.md section 8): Euler rates on the ground (AB
+# schemes limit-cycle on stiff contacts), AB4 rates in the air (energy drift
+# 6e-9 over 10 s instead of 1.6e-3 with the defaults).
+_RATE_ROT_GROUND = 1
+_RATE_ROT_AIR = 5
+
+LEG_BELOW_CG_M = 0.10    # quadx.xml: feet 0.10 m below the CG
+LEG_COUNT = 4
+LEG_SPRING_N_M = 2000.0  # quadx.xml spring_coeff per leg
+# Rotor hubs in body FRD (quadx.xml: 0.1591 m along x and y, 0.03 m above the CG).
+ROTOR_HUBS_FRD_M = ((0.1591, 0.1591, -0.03), (-0.1591, -0.1591, -0.03),
+                    (0.1591, -0.1591, -0.03), (-0.1591, 0.1591, -0.03))
+
+
+class _QuietLogger(jsbsim.FGLogger):
+    """Swallows JSBSim's banner and messages (JSBSIM_NOTES.md section 1)."""
+
+    def set_level(self, level):
+        pass
+
+    def file_location(self, filename, line):
+        pass
+
+    def message(self, message):
+        pass
+
+    def format(self, fmt):
+        pass
+
+    def flush(self):
+        pass
+
+
+_LOGGER = None
+
+
+def _quiet():
+    # The logger is per thread in JSBSim; keep one Python object alive for it.
+    global _LOGGER  # noqa: PLW0603 - process-wide by JSBSim's own design
+    if _LOGGER is None:
+        _LOGGER = _QuietLogger()
+    jsbsim.set_logger(_LOGGER)
+
+
+class Fdm:
+    """One JSBSim instance flying the quad model, placed at a home location.
+
+    Parameters: ``dt_s`` physics step; home latitude/longitude (deg), ground
+    elevation above MSL (m) and heading (deg); ``initial_agl_m`` height of the
+    feet above ground at start (0 = resting on the legs); ``random_seed`` for
+    JSBSim's own generator (turbulence).
+    """
+
+    def __init__(self, dt_s: float, lat_deg: float, lon_deg: float, ground_alt_m: float,
+                 heading_deg: float, initial_agl_m: float = 0.0, random_seed: int = 0,
+                 model: str = "quadx"):
+        _quiet()
+        fdm = jsbsim.FGFDMExec(None)
+        fdm.set_aircraft_path(str(AIRCRAFT_DIR))
+        fdm.set_dt(dt_s)  # before load_model: lag filters take dt at load
+        if not fdm.load_model(model):
+            raise SimulatorError(
+                f"JSBSim could not load model {model!r} from {AIRCRAFT_DIR}; "
+                "check that the XML exists and is well formed")
+        self.fdm = fdm
+        self.dt_s = dt_s
+        pm = fdm.get_property_manager()
+
+        def node(path):
+            n = pm.get_node(path)
+            if n is None:
+                raise SimulatorError(f"model {model!r} lacks property {path}; "
+                                     "it is not a silbridge quad model")
+            return n
+
+        self._node = node
+        self.mass_kg = fdm["inertia/mass-slugs"] * SLUG_KG
+        # Rest height of the CG: legs compressed by m g / (n k) (no bounce at step 1).
+        rest_agl_m = LEG_BELOW_CG_M - self.mass_kg * G0_M_S2 / (LEG_COUNT * LEG_SPRING_N_M)
+        self.rest_agl_m = rest_agl_m
+        fdm["simulation/randomseed"] = int(random_seed) & 0x7FFFFFFF
+        fdm["ic/lat-geod-deg"] = lat_deg
+        fdm["ic/long-gc-deg"] = lon_deg
+        fdm["ic/terrain-elevation-ft"] = ground_alt_m / FT_M
+        fdm["ic/h-agl-ft"] = (rest_agl_m + initial_agl_m) / FT_M
+        fdm["ic/psi-true-deg"] = heading_deg
+        for name in ("ic/phi-deg", "ic/theta-deg", "ic/u-fps", "ic/v-fps", "ic/w-fps",
+                     "ic/p-rad_sec", "ic/q-rad_sec", "ic/r-rad_sec"):
+            fdm[name] = 0.0
+        fdm["simulation/integrator/rate/rotational"] = _RATE_ROT_GROUND
+        fdm["simulation/integrator/rate/translational"] = 3
+        fdm["simulation/integrator/position/rotational"] = 5
+        fdm["simulation/integrator/position/translational"] = 4
+        if not fdm.run_ic():
+            raise SimulatorError("JSBSim refused the initial conditions; check the home location")
+        self._air_integrator = False
+
+        # Inputs.
+        self.h_pwm = [node(f"fcs/m{i}-pwm-us") for i in range(1, 5)]
+        self.h_scale = [node(f"fcs/m{i}-thrust-scale") for i in range(1, 5)]
+        self.h_rate_rot = node("simulation/integrator/rate/rotational")
+        # State.
+        self.h_p, self.h_q, self.h_r = (node(f"velocities/{a}-rad_sec") for a in "pqr")
+        self.h_fbx, self.h_fby, self.h_fbz = (node(f"forces/fb{a}-total-lbs") for a in "xyz")
+        self.h_phi, self.h_theta, self.h_psi = (node(f"attitude/{a}-rad")
+                                                for a in ("phi", "theta", "psi"))
+        self.h_vn, self.h_ve, self.h_vd = (node(f"velocities/v-{a}-fps")
+                                           for a in ("north", "east", "down"))
+        self.h_lat = node("position/lat-geod-rad")
+        self.h_lon = node("position/long-gc-rad")
+        self.h_hagl = node("position/h-agl-ft")
+        self.h_pressure = node("atmosphere/P-psf")
+        self.h_temp = node("atmosphere/T-R")
+        self.h_gear = node("fcs/gear-contacts")
+        self.h_omega = [node(f"fcs/m{i}-omega-rad_s") for i in range(1, 5)]
+        # Disturbance force handles (magnitude lbf, unit direction).
+        self.h_dist_ned = [node(f"external_reactions/dist_ned/{a}") for a in
+                           ("magnitude", "x", "y", "z")]
+        self.h_dist_frd = [node(f"external_reactions/dist_frd/{a}") for a in
+                           ("magnitude", "x", "y", "z")]
+
+        # Home: where the CG rests on the legs below the start point (an air start
+        # is above home); local NED about it on the WGS-84 ellipsoid.
+        lat0 = self.h_lat.get_double_value()
+        self.home_lat_rad = lat0
+        self.home_lon_rad = self.h_lon.get_double_value()
+        self.home_agl_m = rest_agl_m
+        s = math.sin(lat0)
+        w = math.sqrt(1.0 - _WGS84_E2 * s * s)
+        self.m_per_rad_lat = _WGS84_A_M * (1.0 - _WGS84_E2) / (w * w * w)  # meridian radius
+        self.m_per_rad_lon = _WGS84_A_M / w * math.cos(lat0)               # prime vertical
+        self.home_lat_deg = lat_deg
+        self.home_lon_deg = lon_deg
+        self.ground_alt_m = ground_alt_m
+
+    # --- constants of the loaded model -------------------------------------------------
+    def model_constant(self, path: str) -> float:
+        return self._node(path).get_double_value()
+
+    # --- hot-path helpers (kept tiny; the simulator inlines the handle calls) ----------
+    def set_air_integrator(self, airborne: bool) -> None:
+        """AB4 rotational rates in the air, Euler on the ground (no contact limit cycle)."""
+        if airborne != self._air_integrator:
+            self.h_rate_rot.set_double_value(_RATE_ROT_AIR if airborne else _RATE_ROT_GROUND)
+            self._air_integrator = airborne
+
+    def set_dist_force(self, frame: str, magnitude_n: float, unit_dir) -> None:
+        """Disturbance force at the CG: frame 'ned' or 'frd', magnitude in N."""
+        handles = self.h_dist_ned if frame == "ned" else self.h_dist_frd
+        handles[0].set_double_value(magnitude_n / LBF_N)
+        for h, c in zip(handles[1:], unit_dir):
+            h.set_double_value(float(c))
+
+    def set_wind_ned(self, wind_ned_m_s) -> None:
+        """Steady wind, NED components of the air velocity (where the air goes)."""
+        for axis, v in zip(("north", "east", "down"), wind_ned_m_s):
+            self.fdm[f"atmosphere/wind-{axis}-fps"] = float(v) / FT_M
+
+    def set_turbulence(self, kind: str, wind_at_20ft_m_s: float, severity: int) -> None:
+        """JSBSim turbulence: 'none', 'dryden' (MIL-F-8785C, type 3) or 'tustin' (type 4)."""
+        turb_type = {"none": 0, "dryden": 3, "tustin": 4}[kind]
+        self.fdm["atmosphere/turb-type"] = turb_type
+        self.fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps"] = (
+            wind_at_20ft_m_s / FT_M)
+        self.fdm["atmosphere/turbulence/milspec/severity"] = int(severity)
+
+    def set_thrust_scale(self, motor_index: int, scale: float) -> None:
+        self.h_scale[motor_index].set_double_value(scale)

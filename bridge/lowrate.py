@@ -1,0 +1,111 @@
+"""Barometer, magnetometer and GNSS models (the 10-100 Hz sensors).
+
+Each model is sampled by the simulator on the first physics step at or after
+its due time t_m = round(m * 1e9 / rate_hz) ns, m = 1, 2, ... (`Schedule`).
+Noise comes from one named stream per sensor (noise.NormalRows).
+
+- Baro: static pressure from JSBSim's standard atmosphere (ISA, `atmosphere.py`
+  has the closed form the tests compare with) through a first-order lag run at
+  the physics rate, plus an offset and white noise. Temperature: air temperature.
+- Mag: the configured Earth field (NED, gauss) rotated into body FRD, plus a
+  hard-iron offset and white noise.
+- GNSS: truth at each epoch plus a first-order Gauss-Markov position error
+  (sigma_h, sigma_v, tau) and white velocity noise; the fix is published
+  `latency_s` after its epoch (the first step at or after epoch + latency), as
+  a receiver's message arrives late. The record's sim_ns is the arrival time;
+  the position is the one of the epoch.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+from silbridge.bridge.frames import ned_to_frd
+from silbridge.bridge.noise import NormalRows
+
+
+class Schedule:
+    """Due times of a periodic sensor in integer nanoseconds."""
+
+    def __init__(self, rate_hz: float):
+        self.rate_hz = rate_hz
+        self.m = 1
+        self.next_ns = self._due(1)
+
+    def _due(self, m: int) -> int:
+        return int(round(m * 1e9 / self.rate_hz))
+
+    def advance(self) -> None:
+        self.m += 1
+        self.next_ns = self._due(self.m)
+
+
+class Baro:
+    """The simulator advances the lag once per physics step, inline on its hot path:
+    filtered_pa += alpha * (pressure_pa - filtered_pa), alpha = 1 - exp(-dt / lag_s)."""
+
+    def __init__(self, cfg, seed: int, dt_s: float, pressure0_pa: float):
+        self.cfg = cfg
+        self.schedule = Schedule(cfg.rate_hz)
+        self.noise = NormalRows(seed, "baro", 1)
+        self.alpha = 1.0 if cfg.lag_s <= 0 else 1.0 - math.exp(-dt_s / cfg.lag_s)
+        self.filtered_pa = pressure0_pa
+
+    def sample(self) -> float:
+        return self.filtered_pa + self.cfg.offset_pa + self.cfg.noise_pa * self.noise.next_row()[0]
+
+
+class Mag:
+    def __init__(self, cfg, seed: int):
+        self.cfg = cfg
+        self.schedule = Schedule(cfg.rate_hz)
+        self.noise = NormalRows(seed, "mag", 3)
+
+    def sample(self, phi: float, theta: float, psi: float) -> tuple[float, float, float]:
+        bx, by, bz = ned_to_frd(phi, theta, psi, self.cfg.field_ned_gauss)
+        o = self.cfg.offset_gauss
+        n = self.noise.next_row()
+        s = self.cfg.noise_gauss
+        return (bx + o[0] + s * n[0], by + o[1] + s * n[1], bz + o[2] + s * n[2])
+
+
+class Gnss:
+    """Epochs at rate_hz, each released latency_s later."""
+
+    def __init__(self, cfg, seed: int, m_per_rad_lat: float, m_per_rad_lon: float):
+        self.cfg = cfg
+        self.schedule = Schedule(cfg.rate_hz)
+        self.noise = NormalRows(seed, "gnss", 6)
+        self.latency_ns = int(round(cfg.latency_s * 1e9))
+        self.m_per_rad_lat = m_per_rad_lat
+        self.m_per_rad_lon = m_per_rad_lon
+        self.err_ned_m = None   # Gauss-Markov state, started from its stationary law
+        self.last_epoch_ns = 0
+        self.pending: deque = deque()
+
+    def epoch(self, sim_ns: int, lat_rad: float, lon_rad: float, alt_msl_m: float,
+              vel_ned_m_s) -> None:
+        """Measure at an epoch; queue the fix for release after the latency."""
+        c = self.cfg
+        n = self.noise.next_row()
+        sig = (c.pos_sigma_h_m, c.pos_sigma_h_m, c.pos_sigma_v_m)
+        if self.err_ned_m is None:
+            self.err_ned_m = [sig[i] * n[i] for i in range(3)]
+        else:
+            a = math.exp(-(sim_ns - self.last_epoch_ns) * 1e-9 / c.pos_tau_s)
+            q = math.sqrt(1.0 - a * a)
+            self.err_ned_m = [a * self.err_ned_m[i] + q * sig[i] * n[i] for i in range(3)]
+        self.last_epoch_ns = sim_ns
+        e = self.err_ned_m
+        lat_deg = math.degrees(lat_rad + e[0] / self.m_per_rad_lat)
+        lon_deg = math.degrees(lon_rad + e[1] / self.m_per_rad_lon)
+        alt_m = alt_msl_m - e[2]
+        v = c.vel_sigma_m_s
+        vel = (vel_ned_m_s[0] + v * n[3], vel_ned_m_s[1] + v * n[4], vel_ned_m_s[2] + v * n[5])
+        fix = (int(round(lat_deg * 1e7)), int(round(lon_deg * 1e7)), int(round(alt_m * 1000.0)),
+               vel[0], vel[1], vel[2],
+               min(65535, int(round(c.pos_sigma_h_m * 100.0))),
+               min(65535, int(round(c.pos_sigma_v_m * 100.0))),
+               c.fix_type, c.satellites)
+        self.pending.append((sim_ns + self.latency_ns, sim_ns, fix))

@@ -1,0 +1,195 @@
+"""The bridge program's loop: physics -> sensor ring, actuator ring -> motors.
+
+`BridgeLoop` owns one physics step at a time (publish_step / collect_pwm) so
+the same code serves every driver: lockstep or real time, with the FC in
+another process or interleaved in this one (tools/cmd_fly.py). It never
+imports the FC: they meet only through the shared-memory segment.
+
+Lockstep follows shm/lockstep.py: publish step k, wait for FC_SIM_NS >= t_k,
+take the PWM, step again. Real time paces steps to the wall clock and never
+waits for the FC; late PWM simply holds the previous command (zero-order hold),
+as an ESC does.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from silbridge.shm import lockstep as ls
+from silbridge.shm.records import FLAG_STEP_END, PWM_DTYPE, RECORD_DTYPE, SETPOINT_DTYPE, Kind
+
+from .runner_errors import PeerLost
+
+_NS = 1_000_000_000
+_SETPOINT = int(Kind.SETPOINT)   # a plain int: comparing with the enum costs ~1 us per step
+
+
+@dataclass
+class LoopStats:
+    """What the bridge measured; tools/ turns it into the run summary."""
+
+    steps: int = 0
+    sim_ns: int = 0
+    wall_ns: int = 0
+    pwm_received: int = 0
+    pwm_first_sim_ns: int = -1
+    pwm_last_sim_ns: int = -1
+    pwm_first_wall_ns: int = -1
+    pwm_last_wall_ns: int = -1
+    late_steps: int = 0
+    max_late_ns: int = 0
+
+
+class BridgeLoop:
+    """One physics step at a time; see module docstring."""
+
+    # Sample truth for the summary errors every this many physics steps.
+    ERROR_SAMPLE_STEPS = 10
+
+    def __init__(self, sim, segment, *, lockstep: bool, sink=None, settle_s: float = 10.0):
+        self.sim = sim
+        self.seg = segment
+        self.lockstep = lockstep
+        self.sink = sink
+        self.pwm_us = np.full(4, 1000, dtype=np.float64)
+        self.armed = False
+        self.stats = LoopStats()
+        self._hash = hashlib.blake2b(digest_size=16)
+        self._pwm_buf = np.zeros(4096, dtype=RECORD_DTYPE)
+        self.settle_ns = int(settle_s * _NS)
+        self.setpoint = {"roll": 0.0, "pitch": 0.0, "alt": 0.0}
+        self._att_err_sq = []
+        self._alt_err_sq = []
+        self.last_records = None
+
+    # -- one step ---------------------------------------------------------
+    def publish_step(self) -> np.ndarray:
+        """Advance physics one step with the held PWM; publish its records."""
+        recs = self.sim.step(self.pwm_us)
+        k = self.sim.step_index
+        self._hash.update(recs)
+        if recs["kind"][-1] == _SETPOINT:
+            self._take_setpoint(recs[-1:])
+        # A refused push (non-overwriting ring, full) is counted by the ring as
+        # rejected and reported by the start-up checks and the summary.
+        self.seg.sensors.push_batch(recs)
+        self.seg.set_word(ls.BRIDGE_SIM_NS, self.sim.sim_ns)
+        events = self.sim.events
+        if events:
+            if self.sink is not None:
+                for sim_ns, text in events:
+                    self.sink.event(sim_ns, "disturbance", text)
+            events.clear()
+        self.stats.steps = k
+        self.stats.sim_ns = self.sim.sim_ns
+        if k % self.ERROR_SAMPLE_STEPS == 0 and self.sim.sim_ns >= self.settle_ns:
+            self._sample_errors()
+        self.last_records = recs
+        return recs
+
+    def collect_pwm(self) -> int:
+        """Drain the actuator ring; hold the newest command. Returns records read."""
+        n = self.seg.actuators.pop_into(self._pwm_buf)
+        if n == 0:
+            return 0
+        pwm = self._pwm_buf[:n].view(PWM_DTYPE)
+        last = pwm[-1]
+        self.pwm_us[:] = last["pwm_us"][:4]
+        self.armed = bool(last["armed"])
+        st = self.stats
+        if st.pwm_first_sim_ns < 0:
+            st.pwm_first_sim_ns = int(pwm["sim_ns"][0])
+            st.pwm_first_wall_ns = int(pwm["wall_ns"][0])
+        st.pwm_last_sim_ns = int(last["sim_ns"])
+        st.pwm_last_wall_ns = int(last["wall_ns"])
+        st.pwm_received += n
+        if self.sink is not None:
+            self.sink.pwm_records(pwm)
+        # Hash without wall-clock stamps: only what lockstep makes deterministic.
+        clean = self._pwm_buf[:n].copy()
+        clean["wall_ns"] = 0
+        self._hash.update(clean.tobytes())
+        return n
+
+    def fc_caught_up(self) -> bool:
+        return self.seg.word(ls.FC_SIM_NS) >= self.sim.sim_ns
+
+    # -- summary helpers ----------------------------------------------------
+    def _take_setpoint(self, rec) -> None:
+        sp = rec.view(SETPOINT_DTYPE)[0]
+        mask = int(sp["mask"])
+        if mask & 1:
+            self.setpoint["roll"] = float(sp["roll_rad"])
+            self.setpoint["pitch"] = float(sp["pitch_rad"])
+        if mask & 2:
+            self.setpoint["alt"] = float(sp["altitude_m"])
+
+    def _sample_errors(self) -> None:
+        t = self.sim.truth()
+        roll, pitch = t["euler_rad"][0], t["euler_rad"][1]
+        er = roll - self.setpoint["roll"]
+        ep = pitch - self.setpoint["pitch"]
+        self._att_err_sq.append(er * er + ep * ep)
+        alt = -float(t["pos_ned_m"][2])
+        self._alt_err_sq.append((alt - self.setpoint["alt"]) ** 2)
+
+    def attitude_rms_deg(self) -> float | None:
+        if not self._att_err_sq:
+            return None
+        return float(np.degrees(np.sqrt(np.mean(self._att_err_sq))))
+
+    def altitude_rms_m(self) -> float | None:
+        if not self._alt_err_sq:
+            return None
+        return float(np.sqrt(np.mean(self._alt_err_sq)))
+
+    def trace_hash(self) -> str:
+        return self._hash.hexdigest()
+
+
+def step_end_sim_ns(recs: np.ndarray) -> int:
+    """sim time of the last STEP_END record in a batch, or -1."""
+    ends = np.flatnonzero(recs["flags"] & FLAG_STEP_END)
+    if len(ends) == 0:
+        return -1
+    return int(recs["sim_ns"][ends[-1]])
+
+
+class PeerWatch:
+    """Detects a dead or stalled FC within ~100 ms while the bridge waits."""
+
+    def __init__(self, segment, *, extra_check=None, stall_s: float = 5.0):
+        self.seg = segment
+        self.extra_check = extra_check
+        self.stall_ns = int(stall_s * _NS)
+        self._last_beat = None
+        self._last_change = time.monotonic_ns()
+
+    def check(self) -> None:
+        if self.seg.word(ls.FC_STOP):
+            raise PeerLost("the FC left the run (see its messages above); the bridge stops too")
+        if self.extra_check is not None and not self.extra_check():
+            raise PeerLost("the FC process exited; the bridge stops. Check the FC's output for why")
+        if not self.seg.peer_alive():
+            raise PeerLost("the FC process is gone (pid no longer exists); restart `silbridge fc`")
+        beat = self.seg.peer_heartbeat()
+        now = time.monotonic_ns()
+        if beat != self._last_beat:
+            self._last_beat = beat
+            self._last_change = now
+        elif now - self._last_change > self.stall_ns:
+            raise PeerLost(f"the FC stopped beating for {(now - self._last_change) / 1e9:.1f} s "
+                           "(hung or stopped?); the bridge stops")
+
+
+def wait_fc(loop: BridgeLoop, watch: PeerWatch, slice_s: float = 0.02) -> None:
+    """Lockstep wait for the FC to answer the current step, checking it is alive."""
+    target = loop.sim.sim_ns
+    seg = loop.seg
+    while not seg.wait_word(ls.FC_SIM_NS, target, slice_s):
+        watch.check()
+    loop.collect_pwm()

@@ -1,0 +1,28 @@
+"""The FC's flight logic until MAVLink modes take over: arm, take off, hold.
+
+The scenario (bridge side) sends SETPOINT records with the take-off altitude
+and any scripted attitude; the core follows them by itself. What is left for
+the host is the arming decision, made on sim time so it is deterministic:
+the estimator gets `arm_after_s` of still, level data first: while disarmed it
+runs fast gains to align and learn the gyro bias (~5 s, like a real FC's
+ground calibration), and arming earlier leaves a bias that tilts the hover.
+"""
+
+from __future__ import annotations
+
+_NS = 1_000_000_000
+
+
+class AutoFlight:
+    def __init__(self, core, *, arm_after_s: float = 5.0, sink=None):
+        self.core = core
+        self.arm_at_ns = int(arm_after_s * _NS)
+        self.sink = sink
+        self.armed_at_ns = None
+
+    def after_batch(self, loop, recs, pwm, status) -> None:
+        if self.armed_at_ns is None and loop.last_sim_ns >= self.arm_at_ns:
+            self.core.arm()
+            self.armed_at_ns = loop.last_sim_ns
+            if self.sink is not None:
+                self.sink.event(loop.last_sim_ns, "mode", "armed (auto take-off)")

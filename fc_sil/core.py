@@ -1,0 +1,222 @@
+"""FlightCore: the whole C flight-controller chain behind one Python object.
+
+The hot loop stays in C: `step_batch(records)` hands a numpy array of 64-byte
+shared-memory records of mixed kinds (silbridge.shm.records) to the extension
+in one call and gets back the PWM records and one STATUS_DTYPE row per PWM
+tick. Between batches the host sets parameters (by name; validated, effective
+at once), feature switches, arming and targets.
+
+Host-side parameters (FC_HOST in fc_params.def) are validated and kept here
+too, so one object answers for every parameter the FC declares.
+
+Not thread-safe by itself: the extension holds the GIL during every call, so
+calls from two threads never interleave inside C, but a caller that needs a
+consistent group of changes (several parameters at once) must serialise them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import params as P
+from .errors import CoreBuildError, InputError, ParamError
+from .status import STATUS_DTYPE
+
+try:
+    from . import _core
+except ImportError as exc:  # pragma: no cover - only without a build
+    raise CoreBuildError(
+        "the compiled flight-controller core is missing; build it with "
+        "`SILBRIDGE_EXT=core python setup.py build_ext --inplace` (or `make setup`)") from exc
+
+from silbridge.shm.records import PWM_DTYPE, RECORD_SIZE
+
+_STATUS_TEXT = {
+    _core.FC_ERR_ARG: "invalid argument",
+    _core.FC_ERR_RANGE: "out of range",
+    _core.FC_ERR_NONFINITE: "not finite",
+    _core.FC_ERR_INDEX: "unknown parameter",
+    _core.FC_ERR_TYPE: "not an integer",
+}
+
+
+def _check(code: int, what: str) -> None:
+    if code != _core.FC_OK:
+        raise InputError(f"{what}: {_STATUS_TEXT.get(code, code)}; the previous value is kept")
+
+
+class FlightCore:
+    """One flight controller: parameters, inputs, and the C chain."""
+
+    def __init__(self, params: dict | None = None):
+        self._c = _core.Core()
+        self._host = {p.name: p.default for p in P.PARAMS if p.host}
+        for name, value in (params or {}).items():
+            self.set_param(name, value)
+
+    # ---- parameters ------------------------------------------------------
+
+    def set_param(self, name: str, value) -> float:
+        """Validate and store; returns the value as stored. ParamError keeps the old value."""
+        d = P.lookup(name)
+        v = d.validate(value)
+        if d.host:
+            self._host[d.name] = v
+            return v
+        code = self._c.set_param(d.index, v)
+        if code == _core.FC_ERR_RANGE:
+            raise ParamError(f"{d.name}={v:g} is refused: it contradicts another parameter "
+                             "(MOT_PWM_MIN + 100 <= MOT_PWM_MAX, MOT_SPIN_ARM <= MOT_SPIN_MIN < "
+                             "MOT_SPIN_MAX, INS_HNTCH_FREQ > INS_HNTCH_BW / 2); value kept")
+        if code != _core.FC_OK:
+            raise ParamError(f"{d.name}={value!r} refused by the core: "
+                             f"{_STATUS_TEXT.get(code, code)}; value kept")
+        return self._c.get_param(d.index)
+
+    def get_param(self, name: str) -> float:
+        d = P.lookup(name)
+        return self._host[d.name] if d.host else self._c.get_param(d.index)
+
+    def params(self) -> dict[str, float]:
+        """name -> current value of every declared parameter, in index order."""
+        return {p.name: (self._host[p.name] if p.host else self._c.get_param(p.index))
+                for p in P.PARAMS}
+
+    def set_feature(self, feature: str, enabled: bool) -> None:
+        """Switch a stabilisation feature (params.FEATURES) on or off at run time."""
+        self.set_param(P.feature_param(feature), 1 if enabled else 0)
+
+    def feature_enabled(self, feature: str) -> bool:
+        return self.get_param(P.feature_param(feature)) != 0
+
+    # ---- inputs ----------------------------------------------------------
+
+    def arm(self) -> None:
+        self._c.set_armed(True)
+
+    def disarm(self) -> None:
+        self._c.set_armed(False)
+
+    @property
+    def armed(self) -> bool:
+        return bool(self._c.inputs()["armed"])
+
+    def set_attitude_target(self, roll_rad: float, pitch_rad: float, *,
+                            yaw_rad: float | None = None,
+                            yaw_rate_rad_s: float | None = None) -> None:
+        """Roll and pitch [rad]; yaw either as an angle (held when ATC_ANG_YAW_P > 0)
+        or as a rate. Leaving both out keeps the present yaw mode."""
+        if yaw_rad is not None and yaw_rate_rad_s is not None:
+            raise InputError("give either yaw_rad or yaw_rate_rad_s, not both")
+        _check(self._c.set_attitude_target(roll_rad, pitch_rad), "attitude target")
+        if yaw_rad is not None:
+            _check(self._c.set_yaw_target(yaw_rad), "yaw target")
+        if yaw_rate_rad_s is not None:
+            _check(self._c.set_yaw_rate_target(yaw_rate_rad_s), "yaw rate target")
+
+    def set_altitude_target(self, alt_m: float) -> None:
+        """Hold an altitude above home [m, up]; above SB_LIFTOFF_ALT this takes off."""
+        _check(self._c.set_altitude_target(alt_m), "altitude target")
+
+    def set_climb_rate(self, climb_m_s: float) -> None:
+        """Follow a climb rate [m/s, up] (limited by PILOT_SPEED_UP/DN)."""
+        _check(self._c.set_climb_target(climb_m_s), "climb-rate target")
+
+    def set_throttle(self, throttle: float) -> None:
+        """Direct throttle 0..1 of the PWM range (STABILIZE-style manual)."""
+        _check(self._c.set_throttle(throttle), "throttle")
+
+    def set_accel_reference(self, accel_ned_m_s2) -> None:
+        """Optional kinematic acceleration of the vehicle, NED [m/s^2] (e.g. from GNSS
+        velocity), so the estimator's accelerometer correction holds through sustained
+        accelerations (see fc_mahony.h). Ignored 0.5 s after the last call."""
+        _check(self._c.set_accel_ref(tuple(float(v) for v in accel_ned_m_s2)),
+               "acceleration reference")
+
+    def inputs(self) -> dict:
+        return self._c.inputs()
+
+    def set_scenario_setpoints(self, enabled: bool) -> None:
+        """Consume (default) or skip the scenario's SETPOINT records in step_batch;
+        the MAVLink vehicle switches them off so only the GCS commands the vehicle."""
+        self._c.set_setpoint_input(bool(enabled))
+
+    def last_seen_ns(self) -> tuple[int, ...]:
+        """Sim time [ns] of the last record of each kind (index = shm Kind; -1 never)."""
+        return self._c.last_seen()
+
+    def take_accel_mean(self) -> tuple[float, float, float] | None:
+        """Mean raw IMU specific force (FRD, m/s^2) since the last call, or None."""
+        return self._c.take_accel_mean()
+
+    # ---- stepping ----------------------------------------------------------
+
+    def step_batch(self, records: np.ndarray, pwm_out: np.ndarray | None = None,
+                   status_out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Consume a batch of records of mixed kinds; returns (pwm, status).
+
+        pwm is a PWM_DTYPE array (one record per PWM tick now due), status the
+        matching STATUS_DTYPE rows. Give preallocated pwm_out/status_out
+        (at least `pwm_bound(records)` rows) to avoid the two allocations; the
+        results are then views into them.
+        """
+        recs = np.ascontiguousarray(records)
+        if recs.dtype.itemsize != RECORD_SIZE:
+            raise InputError(f"records must be {RECORD_SIZE}-byte slots (shm.records dtypes), "
+                             f"got itemsize {recs.dtype.itemsize}")
+        if pwm_out is None or status_out is None:
+            n = self._c.pwm_bound(recs)
+            if pwm_out is None:
+                pwm_out = np.zeros(n, dtype=PWM_DTYPE)
+            if status_out is None:
+                status_out = np.zeros(n, dtype=STATUS_DTYPE)
+        if pwm_out.dtype.itemsize != RECORD_SIZE or status_out.dtype != STATUS_DTYPE:
+            raise InputError("pwm_out must be PWM_DTYPE and status_out STATUS_DTYPE")
+        k = self._c.step_batch(recs, pwm_out, status_out)
+        return pwm_out[:k], status_out[:k]
+
+    def pwm_bound(self, records: np.ndarray) -> int:
+        """Most PWM ticks step_batch(records) can emit (to size preallocated outputs)."""
+        return self._c.pwm_bound(np.ascontiguousarray(records))
+
+    def step_imu(self, sim_ns: int, accel_frd_m_s2, gyro_frd_rad_s) -> int:
+        """One IMU sample outside a batch; returns the C status code (0 ok)."""
+        return self._c.imu(int(sim_ns), tuple(map(float, accel_frd_m_s2)),
+                           tuple(map(float, gyro_frd_rad_s)))
+
+    def step_baro(self, sim_ns: int, pressure_pa: float) -> int:
+        return self._c.baro(int(sim_ns), float(pressure_pa))
+
+    def step_mag(self, sim_ns: int, field_frd_gauss) -> int:
+        return self._c.mag(int(sim_ns), tuple(map(float, field_frd_gauss)))
+
+    def step_gt_att(self, sim_ns: int, q_wxyz) -> int:
+        return self._c.gt_att(int(sim_ns), tuple(map(float, q_wxyz)))
+
+    def step_gt_nav(self, sim_ns: int, pos_ned_m, vel_ned_m_s) -> int:
+        return self._c.gt_nav(int(sim_ns), tuple(map(float, pos_ned_m)),
+                              tuple(map(float, vel_ned_m_s)))
+
+    def pwm_due(self) -> int | None:
+        """Sim time [ns] of the next PWM tick if it is due, else None."""
+        return self._c.pwm_due()
+
+    def step_pwm(self, tick_ns: int) -> tuple[int, int, int, int]:
+        """Step one PWM tick (see pwm_due); returns the four outputs [us]."""
+        return self._c.pwm_step(int(tick_ns))
+
+    def status(self) -> np.void:
+        """The status snapshot of the last PWM tick (one STATUS_DTYPE row)."""
+        return np.frombuffer(self._c.status_bytes(), dtype=STATUS_DTYPE)[0]
+
+    def counters(self) -> dict:
+        return self._c.counters()
+
+    def gnss(self) -> dict | None:
+        """The last GNSS fix routed to the FC, or None."""
+        return self._c.gnss()
+
+    def reset(self) -> None:
+        """Back to power-on state (disarmed, targets cleared); parameters kept."""
+        self._c.reset()
+

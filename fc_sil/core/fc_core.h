@@ -1,0 +1,204 @@
+/*
+ * fc_core.h - the flight-controller chain, stepped once per IMU sample and
+ * once per PWM period. This is the one object a host drives (the Python
+ * extension here; a real flight controller's scheduler later).
+ *
+ *   IMU sample : front-end filters -> Mahony -> vertical prediction; then,
+ *                decimated to at most SB_LOOP_HZ: EST/GT blend -> attitude P
+ *                -> rate PI+D (x3) -> hover trim -> mixer inputs cr, cp, cy.
+ *   PWM period : spool logic (arming, take-off, lift-off and landing
+ *                detection) -> altitude controller -> mixer, clamp, slew ->
+ *                PWM, and a status snapshot.
+ *   BARO / MAG / GT / GNSS: routed to the vertical estimator, the heading
+ *                corrector, the blend inputs and a store.
+ *
+ * PWM ticks lie on a grid of 1/SB_PWM_HZ in simulation time. fc_core_pwm_due
+ * tells the host when a tick is due: every tick whose time is <= the latest
+ * accepted IMU sample. The core keeps no clock of its own and makes no OS call.
+ *
+ * Inputs (targets) are set between steps with the fc_core_set_* functions;
+ * they validate (non-finite refused) and take effect on the next step.
+ * No heap, no globals: everything lives in fc_core_t (about 2 kB).
+ */
+#ifndef FC_CORE_H
+#define FC_CORE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "fc_alt_ctrl.h"
+#include "fc_alt_est.h"
+#include "fc_attitude.h"
+#include "fc_blend.h"
+#include "fc_ins.h"
+#include "fc_mahony.h"
+#include "fc_mixer.h"
+#include "fc_params.h"
+#include "fc_rate_pid.h"
+#include "fc_status.h"
+#include "fc_trim.h"
+
+/* One snapshot per PWM tick: what logs, PID_TUNING and tests read. The
+ * Python STATUS_DTYPE mirrors this layout field for field (checked by a test). */
+typedef struct fc_core_status {
+    int64_t sim_ns;                  /* PWM tick time [ns] */
+    int64_t imu_sim_ns;              /* latest IMU sample used [ns] */
+    float q_est_wxyz[4];             /* estimated attitude, body FRD -> NED */
+    float euler_est_rad[3];          /* roll, pitch, yaw of the estimate [rad] */
+    float att_target_rad[3];         /* commanded roll, pitch, yaw [rad] */
+    float att_error_frd_rad[3];      /* blended small-angle error ex, ey, ez [rad] */
+    float rate_target_frd_rad_s[3];  /* rate-loop targets [rad/s] */
+    float rate_frd_rad_s[3];         /* filtered, bias-corrected gyro of the rate loop [rad/s] */
+    float pid_p[3];                  /* rate-loop terms per axis [us] */
+    float pid_i[3];
+    float pid_d[3];
+    float pid_ff[3];
+    float cp_us, cr_us, cy_us;       /* mixer inputs about 0 [us] (trim included) */
+    float throttle_us;               /* mixer throttle input [us] */
+    float motor_us[4];               /* mixed and clamped, before the slew limit [us] */
+    float trust;                     /* accelerometer trust 0..1 */
+    float gyro_bias_rad_s[3];        /* gyro bias estimate [rad/s] */
+    float blend_w;                   /* ground-truth weight 0..1 */
+    float alt_est_m;                 /* estimated altitude above home, up [m] */
+    float climb_est_m_s;             /* estimated climb rate, up [m/s] */
+    float alt_target_m;              /* altitude target [m] (NaN when not in altitude mode) */
+    float climb_target_m_s;          /* climb-rate target of the altitude loop [m/s] */
+    float throttle;                  /* altitude-loop output 0..1 */
+    float trim_us[2];                /* applied hover trim, roll and pitch [us] */
+    uint32_t loop_count;             /* rate-loop runs so far */
+    uint32_t rejected_count;         /* refused input samples so far */
+    uint16_t pwm_us[4];              /* outputs after slew [us] */
+    uint8_t limited[3];              /* rate-loop integrator limited, per axis */
+    uint8_t sat_flags;               /* FC_SAT_* of this tick */
+    uint8_t armed;
+    uint8_t airborne;                /* lift-off detected and not landed */
+    uint8_t spool;                   /* fc_spool_t */
+    uint8_t reserved[5];             /* explicit padding to a multiple of 8 */
+} fc_core_status_t;
+
+typedef struct fc_core_inputs {
+    uint8_t armed;
+    uint8_t yaw_hold;        /* 1: yaw angle target; 0: yaw rate target */
+    uint8_t alt_mode;        /* fc_alt_mode_t */
+    float roll_target_rad;
+    float pitch_target_rad;
+    float yaw_target_rad;
+    float yaw_rate_target_rad_s;
+    float alt_target_m;      /* above home, up */
+    float climb_target_m_s;  /* up */
+    float throttle;          /* 0..1, direct-throttle mode */
+} fc_core_inputs_t;
+
+typedef struct fc_gnss_store {
+    int64_t sim_ns;
+    int32_t lat_e7, lon_e7, alt_mm;
+    float vel_ned_m_s[3];
+    uint8_t fix_type;
+    uint8_t satellites;
+    bool valid;
+} fc_gnss_store_t;
+
+typedef struct fc_core {
+    fc_params_t params;
+    fc_core_inputs_t in;
+
+    /* block configurations derived from params (fc_core_apply_params) */
+    fc_ins_config_t ins_cfg;
+    fc_mahony_config_t ahrs_cfg;        /* in flight (armed) */
+    fc_mahony_config_t ahrs_ground_cfg; /* disarmed: fast alignment and bias learning */
+    fc_attitude_config_t att_cfg;
+    fc_rate_pid_config_t pid_cfg[3];
+    fc_trim_config_t trim_cfg;
+    fc_mixer_config_t mix_cfg;
+    fc_alt_ctrl_config_t alt_cfg;
+    float angle_max_rad;
+    float loop_period_s;
+    int64_t pwm_period_ns;
+
+    /* blocks */
+    fc_ins_t ins;
+    fc_mahony_t ahrs;
+    fc_rate_pid_t pid[3];
+    fc_trim_t trim;
+    fc_blend_t blend;
+    fc_mixer_t mixer;
+    fc_alt_est_t alt_est;
+    fc_alt_ctrl_t alt_ctrl;
+
+    bool ahrs_ground;     /* ahrs runs the ground configuration */
+
+    /* time */
+    bool have_imu;
+    int64_t last_imu_ns;
+    float imu_dt_s;       /* IMU period the front-end coefficients use [s] */
+    float loop_dt_s;      /* rate-loop period the PID filters use [s] */
+    float loop_accum_s;   /* time since the last rate-loop run [s] */
+    int64_t next_pwm_ns;
+
+    /* ground truth (blend inputs) and GNSS store */
+    float gt_q_wxyz[4];
+    int64_t gt_att_ns;
+    bool have_gt_att;
+    float gt_alt_m, gt_climb_m_s;
+    int64_t gt_nav_ns;
+    bool have_gt_nav;
+    fc_gnss_store_t gnss;
+
+    /* latest rate-loop results */
+    float att_target_rad[3];
+    float att_err_frd_rad[3];
+    float rate_target_frd_rad_s[3];
+    float rate_frd_rad_s[3];  /* filtered, bias-corrected gyro of the rate loop [rad/s] */
+    float trim_us[2];
+    float cr_us, cp_us, cy_us;
+    float throttle_us;
+    uint8_t airborne;
+    uint8_t spool;
+    uint8_t armed_prev;
+    float landed_s;
+
+    uint32_t imu_count, loop_count, pwm_count, rejected_count;
+    fc_core_status_t status;
+} fc_core_t;
+
+/* Defaults for every parameter, all state reset. */
+void fc_core_init(fc_core_t *c);
+/* Reset all state and inputs, keep parameters. */
+void fc_core_reset(fc_core_t *c);
+
+/* Parameters by permanent index: validated (range, finiteness, integrality,
+ * cross-checks such as MOT_PWM_MIN < MOT_PWM_MAX), effective at once. */
+fc_status_t fc_core_set_param(fc_core_t *c, uint16_t index, float value);
+fc_status_t fc_core_get_param(const fc_core_t *c, uint16_t index, float *value);
+/* Re-derive every block configuration from c->params (states kept). */
+void fc_core_apply_params(fc_core_t *c);
+
+/* Inputs. */
+void fc_core_set_armed(fc_core_t *c, bool armed);
+fc_status_t fc_core_set_attitude_target(fc_core_t *c, float roll_rad, float pitch_rad);
+fc_status_t fc_core_set_yaw_target(fc_core_t *c, float yaw_rad);
+fc_status_t fc_core_set_yaw_rate_target(fc_core_t *c, float yaw_rate_rad_s);
+fc_status_t fc_core_set_altitude_target(fc_core_t *c, float alt_m);
+fc_status_t fc_core_set_climb_target(fc_core_t *c, float climb_m_s);
+fc_status_t fc_core_set_throttle(fc_core_t *c, float throttle);
+/* Optional kinematic acceleration reference for the estimator, NED [m/s^2]
+ * (e.g. from GNSS velocity); see fc_mahony.h. Expires after 0.5 s. */
+fc_status_t fc_core_set_accel_ref(fc_core_t *c, const float accel_ned_m_s2[3]);
+
+/* Sensor and truth inputs. */
+fc_status_t fc_core_imu_step(fc_core_t *c, int64_t sim_ns, const float accel_frd_m_s2[3],
+                             const float gyro_frd_rad_s[3]);
+fc_status_t fc_core_baro_step(fc_core_t *c, int64_t sim_ns, float pressure_pa);
+fc_status_t fc_core_mag_step(fc_core_t *c, int64_t sim_ns, const float field_frd[3]);
+fc_status_t fc_core_gt_att_step(fc_core_t *c, int64_t sim_ns, const float q_wxyz[4]);
+/* Ground-truth position relative to home and velocity, NED (float: the host
+ * converts, so the core has no double arithmetic). */
+fc_status_t fc_core_gt_nav_step(fc_core_t *c, int64_t sim_ns, const float pos_ned_m[3],
+                                const float vel_ned_m_s[3]);
+fc_status_t fc_core_gnss_step(fc_core_t *c, const fc_gnss_store_t *fix);
+
+/* PWM: is a tick due (time <= latest IMU)? Then step it; fills c->status. */
+bool fc_core_pwm_due(const fc_core_t *c, int64_t *tick_ns);
+fc_status_t fc_core_pwm_step(fc_core_t *c, int64_t tick_ns, uint16_t pwm_us[FC_MIXER_MOTORS]);
+
+#endif /* FC_CORE_H */

@@ -1,0 +1,93 @@
+/*
+ * fc_mahony.h - Mahony attitude estimator (paper Listing 3, corrected).
+ *
+ * Per IMU sample: the accelerometer direction is compared with the gravity
+ * direction the estimate predicts; the cross product is the tilt error. A PI
+ * correction, weighted by an accelerometer trust, is added to the
+ * bias-corrected gyro rate, and the quaternion is integrated with the
+ * exponential map and renormalised.
+ *
+ * Accelerometer trust: trust_raw = clamp(1 - | |a|/g - 1 | / span, 0, 1) (the
+ * listing has span = 1 g; a smaller span distrusts dynamic flight sooner), smoothed by
+ * an EMA of time constant trust_tc_s (alpha = 1 - exp(-dt/tau), so the
+ * smoothing does not depend on the IMU rate). Two fixes against the listing:
+ * its trust lived in a function-local `static` (a global in disguise: two
+ * estimators would share it); ours is in the struct. And it took |a| of the
+ * already normalised vector, so trust_raw was always 1; we use the raw |a|.
+ *
+ * Gyro bias: the listing's EMA `bias = (1-b) bias + b (gyro - omega)` feeds
+ * back omega, which already contains -bias and the correction terms, and
+ * uses a per-sample b (so its time constant changes with the IMU rate). What
+ * observes the bias is the PI integrator: in steady state integ = bias -
+ * true_bias. So under quasi-static conditions (|gyro - bias| and | |a|/g - 1 |
+ * small) we move a fraction alpha = 1 - exp(-dt * bias_rate) of the
+ * integrator into the explicit bias estimate (bias -= alpha integ; integ -=
+ * alpha integ). omega is unchanged by the transfer (bumpless), and the bias
+ * estimate is what logs and tests read.
+ *
+ * Acceleration reference (optional): without one, the accelerometer is taken
+ * to measure gravity alone, which a sustained horizontal acceleration (a held
+ * tilt, a steady push) violates for seconds: the estimate is pulled towards
+ * the thrust axis. A host that knows the vehicle's kinematic acceleration
+ * (from GNSS velocity, say) can hand it in with fc_mahony_set_accel_ref; the
+ * expected specific force then becomes a_ref - g and the trust compares |a|
+ * with its magnitude. It expires FC_MAHONY_ACCEL_REF_STALE_S after the last set.
+ *
+ * Heading (paper 3.4: MAG goes to the yaw/heading corrector): each
+ * magnetometer sample gives the heading error of the estimate (field rotated
+ * to NED, its horizontal direction against magnetic north + declination); it
+ * is applied about the NED down axis with gain kmag and integrated with ki,
+ * which makes the yaw gyro bias observable. The first sample after alignment
+ * sets the heading at once.
+ */
+#ifndef FC_MAHONY_H
+#define FC_MAHONY_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "fc_status.h"
+
+typedef struct fc_mahony_config {
+    float kp;               /* tilt correction P [1/s] */
+    float ki;               /* tilt correction I [1/s^2] */
+    float kmag;             /* heading correction P [1/s] */
+    float trust_tc_s;       /* accelerometer-trust EMA time constant [s] */
+    float trust_span_g;     /* | |a|/g - 1 | at which the raw trust reaches 0 [g] */
+    float bias_rate_hz;     /* integrator -> bias transfer rate while quasi-static [1/s] */
+    float still_gyro_rad_s; /* quasi-static: |gyro - bias| below this [rad/s] */
+    float still_acc_g;      /* quasi-static: | |a|/g - 1 | below this [g] */
+    bool trust_ema_enable;  /* false: trust = trust_raw (ablation) */
+    bool bias_enable;       /* false: no explicit bias estimate */
+} fc_mahony_config_t;
+
+typedef struct fc_mahony {
+    fc_mahony_config_t cfg;
+    float q_wxyz[4];          /* body FRD -> world NED */
+    float bias_rad_s[3];      /* gyro bias estimate, FRD [rad/s] */
+    float integ_rad_s[3];     /* PI integrator, FRD [rad/s] */
+    float trust;              /* smoothed accelerometer trust, 0..1 */
+    float trust_raw;          /* this sample's trust, 0..1 */
+    float accel_ref_ned_m_s2[3]; /* kinematic acceleration reference, NED [m/s^2] */
+    float accel_ref_age_s;    /* time since it was set [s] */
+    bool accel_ref_valid;
+    float heading_err_rad;    /* latest magnetometer heading error (estimate - mag) */
+    float heading_age_s;      /* time since that error was measured [s] */
+    bool heading_valid;       /* a magnetometer sample has been used */
+    bool still;               /* quasi-static on the last sample */
+    bool aligned;             /* tilt initialised from the accelerometer */
+} fc_mahony_t;
+
+void fc_mahony_init(fc_mahony_t *m, const fc_mahony_config_t *cfg);
+void fc_mahony_configure(fc_mahony_t *m, const fc_mahony_config_t *cfg);
+/* Set the attitude (tests start 30 degrees off); clears bias and integrator. */
+void fc_mahony_set_attitude(fc_mahony_t *m, const float q_wxyz[4]);
+/* Roll and pitch from one accelerometer sample, yaw 0. */
+fc_status_t fc_mahony_align(fc_mahony_t *m, const float accel_frd_m_s2[3]);
+fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
+                             const float accel_frd_m_s2[3], float dt_s);
+fc_status_t fc_mahony_mag(fc_mahony_t *m, const float field_frd[3], float declination_rad);
+/* Kinematic acceleration of the vehicle, NED [m/s^2] (not the specific force). */
+fc_status_t fc_mahony_set_accel_ref(fc_mahony_t *m, const float accel_ned_m_s2[3]);
+
+#endif /* FC_MAHONY_H */

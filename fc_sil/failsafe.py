@@ -1,0 +1,137 @@
+"""Failsafes: what the vehicle does when a link, a sensor or the battery lets it down.
+
+Checked at the outer-loop rate; each failsafe latches (one action, one STATUSTEXT) and clears
+when its cause is gone, as ArduCopter's do. Actions are requests to the vehicle
+(``set_mode_internal``, ``failsafe_disarm``); the vehicle decides what a mode change means
+when it is on the ground (nothing: a landed vehicle only stays landed).
+
+* GCS: a HEARTBEAT from SYSID_MYGCS was seen and then none for FS_GCS_TIMEOUT (wall clock,
+  the link's own time) while armed and flying -> RTL (FS_GCS_ENABLE 1) or LAND (5).
+* sensors (sim time, SB_FS_SENS_TO): IMU stream lost -> motors to a safe state (disarm: the
+  FC cannot stabilise without rates, and spinning motors under no control are the danger);
+  barometer lost while flying -> LAND; GNSS silent for SB_GPS_TO or no 3D fix while a
+  position mode flies -> LAND (ArduCopter's EKF failsafe default).
+* battery: voltage below BATT_LOW_VOLT (BATT_CRT_VOLT) for BATT_LOW_TIMER, or remaining
+  capacity below BATT_LOW_MAH (BATT_CRT_MAH) -> BATT_FS_LOW_ACT (BATT_FS_CRT_ACT):
+  0 warn only, 1 LAND, 2 RTL (LAND when RTL is impossible).
+"""
+
+from __future__ import annotations
+
+from pymavlink.dialects.v20 import ardupilotmega as mav
+
+from silbridge.mavlink.vehicle_api import CopterMode
+from silbridge.shm.records import Kind
+
+CRIT = mav.MAV_SEVERITY_CRITICAL
+
+
+class FailsafeMonitor:
+    def __init__(self):
+        self.gcs = False
+        self.imu = False
+        self.baro = False
+        self.gps = False
+        self.batt_low = False
+        self.batt_crit = False
+        self._low_since_ns = None
+        self._crit_since_ns = None
+
+    @property
+    def active(self) -> bool:
+        return self.gcs or self.imu or self.baro or self.gps or self.batt_low or self.batt_crit
+
+    def check(self, v) -> None:
+        self._check_sensors(v)
+        self._check_gcs(v)
+        self._check_battery(v)
+
+    # ---- sensors ----------------------------------------------------------------------------
+
+    def _check_sensors(self, v) -> None:
+        to_ns = int(v.cfg.sens_timeout_s * 1e9)
+        seen = v.last_seen_ns
+        imu_lost = seen[Kind.IMU] < 0 or v.sim_ns - seen[Kind.IMU] > to_ns
+        if imu_lost and not self.imu and v.armed:
+            self.imu = True
+            v.statustext(CRIT, "Failsafe: IMU data lost, motors stopped")
+            v.failsafe_disarm()
+        elif not imu_lost:
+            self.imu = False
+        baro_lost = seen[Kind.BARO] < 0 or v.sim_ns - seen[Kind.BARO] > to_ns
+        if baro_lost and not self.baro and v.armed and v.airborne:
+            self.baro = True
+            v.statustext(CRIT, "Failsafe: Baro data lost, landing")
+            v.set_mode_internal(CopterMode.LAND, "baro failsafe")
+        elif not baro_lost:
+            self.baro = False
+        if v.mode.requires_position and v.armed and v.airborne and not v.position_ok():
+            if not self.gps:
+                self.gps = True
+                v.statustext(CRIT, "Failsafe: lost GPS position, landing")
+                v.set_mode_internal(CopterMode.LAND, "GPS failsafe")
+        elif v.position_ok():
+            self.gps = False
+
+    # ---- GCS --------------------------------------------------------------------------------
+
+    def _check_gcs(self, v) -> None:
+        action = v.cfg.fs_gcs_enable
+        silent_s = v.gcs_silence_s()
+        if silent_s is None or action == 0:
+            self.gcs = False
+            return
+        lost = silent_s > v.cfg.fs_gcs_timeout_s and silent_s != float("inf")
+        if not lost:
+            if self.gcs:
+                v.statustext(mav.MAV_SEVERITY_INFO, "GCS Failsafe Cleared")
+            self.gcs = False
+            return
+        if self.gcs or not (v.armed and v.airborne):
+            return
+        self.gcs = True
+        v.statustext(CRIT, "GCS Failsafe")
+        self._act(v, 2 if action == 1 else 1, "GCS failsafe")
+
+    # ---- battery ----------------------------------------------------------------------------
+
+    def _check_battery(self, v) -> None:
+        cfg, b = v.cfg, v.battery
+        low = self._level(v, cfg.batt_low_volt, cfg.batt_low_mah, "_low_since_ns")
+        crit = self._level(v, cfg.batt_crt_volt, cfg.batt_crt_mah, "_crit_since_ns")
+        if crit and not self.batt_crit:
+            self.batt_crit = True
+            v.statustext(CRIT, f"Battery 1 is critical {b.voltage_v:.2f}V used "
+                               f"{b.consumed_mah:.0f} mAh")
+            if v.armed and v.airborne:
+                self._act(v, cfg.batt_fs_crt_act, "battery critical")
+        if low and not self.batt_low:
+            self.batt_low = True
+            v.statustext(CRIT, f"Battery 1 is low {b.voltage_v:.2f}V used "
+                               f"{b.consumed_mah:.0f} mAh")
+            if v.armed and v.airborne and not self.batt_crit:
+                self._act(v, cfg.batt_fs_low_act, "battery low")
+
+    def _level(self, v, volt: float, mah: float, since_attr: str) -> bool:
+        b = v.battery
+        hit_mah = mah > 0 and b.cfg.capacity_mah > 0 and b.remaining_mah < mah
+        if volt > 0 and b.voltage_v < volt:
+            since = getattr(self, since_attr)
+            if since is None:
+                setattr(self, since_attr, v.sim_ns)
+                since = v.sim_ns
+            hit_v = v.sim_ns - since >= int(v.cfg.batt_low_timer_s * 1e9)
+        else:
+            setattr(self, since_attr, None)
+            hit_v = False
+        return hit_mah or hit_v
+
+    @staticmethod
+    def _act(v, action: int, why: str) -> None:
+        """1 LAND, 2 RTL (LAND when RTL is impossible); 0 warn only."""
+        if action == 2 and v.home_set and v.position_ok():
+            if v.mode.number not in (CopterMode.RTL, CopterMode.LAND):
+                v.set_mode_internal(CopterMode.RTL, why)
+        elif action in (1, 2):
+            if v.mode.number != CopterMode.LAND:
+                v.set_mode_internal(CopterMode.LAND, why)

@@ -1,0 +1,309 @@
+"""Flight modes with ArduCopter's numbers: what each mode asks of the controllers.
+
+A mode is a small object with ``enter(v)`` (None, or the reason the change is refused, as
+ArduCopter's STATUSTEXT words it) and ``run(v, dt_s)`` called at the outer-loop rate. Modes
+never touch the C core directly; they use the vehicle's navigation helpers
+(fc_sil/vehicle.py ``Vehicle``: ``hold_position``, ``fly_track``, ``pilot_vertical``,
+``command_vertical``, ``land_descent``...), so every mode shares one position controller,
+one waypoint navigator and one vertical channel, as in ArduCopter.
+
+  STABILIZE 0  pilot lean angles, yaw rate and throttle (MANUAL_CONTROL / RC override)
+  ALT_HOLD  2  pilot lean angles and yaw rate; throttle stick = climb rate, centred = hold
+  AUTO      3  the mission (mission_exec.py)
+  GUIDED    4  GCS targets: take-off, position, velocity (GUID_TIMEOUT), reposition
+  LOITER    5  position hold; sticks = horizontal velocity up to LOIT_SPEED
+  RTL       6  climb to RTL_ALT, fly home, loiter RTL_LOIT_TIME, land (or hover RTL_ALT_FINAL)
+  LAND      9  hold position (when there is one) and descend; disarm on touchdown
+  BRAKE    17  stop as fast as WPNAV_ACCEL allows, then hold
+"""
+
+from __future__ import annotations
+
+import math
+
+from silbridge.mavlink.vehicle_api import CopterMode
+
+
+class Mode:
+    number = -1
+    name = "?"
+    requires_position = False    # needs a horizontal position estimate (GNSS)
+    armable = True               # arming allowed in this mode
+    manual_throttle = False      # throttle stick sets throttle directly
+
+    def enter(self, v) -> str | None:
+        return None
+
+    def exit(self, v) -> None:
+        pass
+
+    def run(self, v, dt_s: float) -> None:
+        raise NotImplementedError
+
+    @property
+    def guided_enabled(self) -> bool:
+        """HEARTBEAT GUIDED_ENABLED: the horizontal position controller is active."""
+        return self.requires_position
+
+
+class Stabilize(Mode):
+    number, name, manual_throttle = CopterMode.STABILIZE, "STABILIZE", True
+
+    def run(self, v, dt_s):
+        v.pilot_attitude()
+        v.command_throttle(v.pilot_throttle())
+
+
+class AltHold(Mode):
+    number, name = CopterMode.ALT_HOLD, "ALT_HOLD"
+
+    def enter(self, v):
+        v.reset_vertical()
+
+    def run(self, v, dt_s):
+        v.pilot_attitude()
+        v.pilot_vertical(dt_s)
+
+
+class Loiter(Mode):
+    number, name, requires_position = CopterMode.LOITER, "LOITER", True
+
+    def enter(self, v):
+        v.reset_vertical()
+        v.reset_horizontal()
+        self.hold_ne = None
+
+    def run(self, v, dt_s):
+        v.pilot_vertical(dt_s)
+        roll_in, pitch_in, yaw_in = v.pilot_sticks_rpy()
+        v.pilot_yaw(yaw_in)
+        if abs(roll_in) > 0.05 or abs(pitch_in) > 0.05:
+            # sticks: a velocity in the heading frame (pitch forward = stick down = negative)
+            speed = v.cfg.loit_speed_m_s
+            fwd, right = -pitch_in * speed, roll_in * speed
+            c, s = math.cos(v.yaw_rad), math.sin(v.yaw_rad)
+            vel = (fwd * c - right * s, fwd * s + right * c)
+            v.hold_position(dt_s, None, vel, speed)
+            self.hold_ne = None
+        else:
+            if self.hold_ne is None:
+                # brake first; the hold point is where the vehicle comes to rest
+                if math.hypot(*v.est.vel_ne_m_s) < 0.3 or not v.airborne:
+                    self.hold_ne = tuple(v.est.pos_ne_m)
+                else:
+                    v.hold_position(dt_s, None, (0.0, 0.0), v.cfg.loit_speed_m_s)
+                    return
+            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
+
+
+class Brake(Mode):
+    number, name, requires_position, armable = CopterMode.BRAKE, "BRAKE", True, False
+
+    def enter(self, v):
+        v.reset_vertical()
+        self.hold_ne = None
+
+    def run(self, v, dt_s):
+        v.command_vertical(dt_s, v.alt_hold_m)
+        if self.hold_ne is None and (math.hypot(*v.est.vel_ne_m_s) < 0.2 or not v.airborne):
+            self.hold_ne = tuple(v.est.pos_ne_m)
+        v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
+
+
+class Guided(Mode):
+    """GCS targets. ``target`` is one of None (hold), ("pos", ne, alt), ("vel", vel_ne, climb,
+    deadline_ns), ("takeoff", alt)."""
+    number, name, requires_position = CopterMode.GUIDED, "GUIDED", True
+
+    def enter(self, v):
+        v.reset_vertical()
+        v.reset_horizontal()
+        self.target = None
+        self.hold_ne = tuple(v.est.pos_ne_m)
+        self.track_to = None
+
+    def start_takeoff(self, v, alt_m: float) -> None:
+        self.target = ("takeoff", alt_m)
+        self.hold_ne = tuple(v.est.pos_ne_m)
+        v.takeoff_in_progress = True
+
+    def go_to(self, v, ne, alt_m: float, speed_m_s: float | None = None) -> None:
+        self.target = ("pos", tuple(ne), alt_m)
+        v.start_track(ne, alt_m, speed_m_s)
+
+    def set_velocity(self, v, vel_ne, climb_m_s: float) -> None:
+        deadline = v.sim_ns + int(v.cfg.guid_timeout_s * 1e9)
+        self.target = ("vel", tuple(vel_ne), climb_m_s, deadline)
+
+    def set_attitude(self, v, roll_rad: float, pitch_rad: float, yaw_rad: float,
+                     climb_m_s: float) -> None:
+        deadline = v.sim_ns + int(v.cfg.guid_timeout_s * 1e9)
+        self.target = ("att", roll_rad, pitch_rad, yaw_rad, climb_m_s, deadline)
+
+    def run(self, v, dt_s):
+        t = self.target
+        if t is not None and t[0] == "att":
+            if v.sim_ns > t[5]:
+                # GUID_TIMEOUT: attitude stream stopped: level out and hold where we stop
+                self.target = ("vel", (0.0, 0.0), 0.0, float("inf"))
+                v.reset_horizontal()
+                v.alt_hold_m = v.alt_m
+                t = self.target
+            else:
+                lim = v.cfg.angle_max_rad
+                v.command_attitude(max(-lim, min(lim, t[1])), max(-lim, min(lim, t[2])))
+                v.yaw_target_rad = t[3]
+                v.yaw_rate_cmd = None
+                if t[4] == 0.0:
+                    v.command_vertical(dt_s, v.alt_hold_m)
+                else:
+                    v.command_climb(dt_s, t[4])
+                return
+        if t is None:
+            v.command_vertical(dt_s, v.alt_hold_m)
+            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
+            v.hold_heading()
+            return
+        kind = t[0]
+        if kind == "takeoff":
+            v.command_vertical(dt_s, t[1])
+            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
+            v.hold_heading()
+            if v.airborne and v.alt_m >= t[1] - v.cfg.takeoff_done_m:
+                v.takeoff_in_progress = False
+                v.alt_hold_m = t[1]
+                self.target = None
+            return
+        if kind == "pos":
+            done = v.fly_track(dt_s)
+            if done:
+                self.hold_ne = t[1]
+                v.alt_hold_m = t[2]
+                self.target = None
+            return
+        if kind == "vel":
+            if v.sim_ns > t[3]:
+                # GUID_TIMEOUT: the stream stopped: stop and hold where we come to rest
+                self.target = ("vel", (0.0, 0.0), 0.0, float("inf"))
+                t = self.target
+            v.hold_position(dt_s, None, t[1], v.cfg.wp.speed_m_s)
+            if t[2] == 0.0:
+                v.command_vertical(dt_s, v.alt_hold_m)
+            else:
+                v.command_climb(dt_s, t[2])
+            v.hold_heading()
+
+
+class Auto(Mode):
+    number, name, requires_position = CopterMode.AUTO, "AUTO", True
+    armable = False   # as ArduCopter without AUTO_OPTIONS: arm in GUIDED/LOITER, then AUTO
+
+    def enter(self, v):
+        return v.mission.start(v)
+
+    def exit(self, v):
+        v.mission.pause(v)
+
+    def run(self, v, dt_s):
+        v.mission.run(v, dt_s)
+
+
+class Rtl(Mode):
+    number, name, requires_position, armable = CopterMode.RTL, "RTL", True, False
+
+    def enter(self, v):
+        if not v.home_set:
+            return "RTL: no home position"
+        if not v.airborne:
+            return "RTL: vehicle is landed"
+        v.reset_vertical()
+        self.seq = RtlSequence(v)
+        return None
+
+    def run(self, v, dt_s):
+        self.seq.run(v, dt_s)
+
+    @property
+    def phase(self) -> str:
+        return self.seq.phase
+
+
+class RtlSequence:
+    """climb -> return -> loiter -> land (or hover at RTL_ALT_FINAL); also AUTO's RTL item."""
+
+    def __init__(self, v):
+        cfg = v.cfg
+        self.return_alt_m = max(v.alt_m + cfg.rtl_climb_min_m, cfg.rtl_alt_m)
+        home_dist = math.hypot(*v.est.pos_ne_m) if v.home_ne is None else \
+            math.hypot(v.est.pos_ne_m[0] - v.home_ne[0], v.est.pos_ne_m[1] - v.home_ne[1])
+        if home_dist < cfg.wp.radius_m:
+            # already over home: ArduCopter does not climb then
+            self.return_alt_m = max(v.alt_m, cfg.rtl_alt_final_m, 0.0)
+        self.phase = "climb"
+        self.loiter_until_ns = None
+        self.done = False
+        v.start_track(v.est.pos_ne_m, self.return_alt_m, None)
+
+    def run(self, v, dt_s):
+        cfg = v.cfg
+        if self.phase == "climb":
+            if v.fly_track(dt_s):
+                speed = cfg.rtl_speed_m_s or None
+                v.start_track(v.home_ne, self.return_alt_m, speed)
+                self.phase = "return"
+                v.face_track(rtl=True)
+        elif self.phase == "return":
+            if v.fly_track(dt_s):
+                self.phase = "loiter"
+                self.loiter_until_ns = v.sim_ns + int(cfg.rtl_loit_time_s * 1e9)
+        elif self.phase == "loiter":
+            v.command_vertical(dt_s, self.return_alt_m)
+            v.hold_position(dt_s, v.home_ne, (0.0, 0.0), cfg.wp.speed_m_s)
+            if v.sim_ns >= self.loiter_until_ns:
+                if cfg.rtl_alt_final_m > 0.0:
+                    v.start_track(v.home_ne, cfg.rtl_alt_final_m, None)
+                    self.phase = "final"
+                else:
+                    self.phase = "land"
+        elif self.phase == "final":
+            if v.fly_track(dt_s):
+                self.phase = "hover"
+        elif self.phase == "hover":
+            v.command_vertical(dt_s, cfg.rtl_alt_final_m)
+            v.hold_position(dt_s, v.home_ne, (0.0, 0.0), cfg.wp.speed_m_s)
+            self.done = True
+        elif self.phase == "land":
+            v.hold_position(dt_s, v.home_ne, (0.0, 0.0), cfg.wp.speed_m_s)
+            if v.land_descent(dt_s):
+                self.phase = "landed"
+                self.done = True
+                v.disarm_landed("RTL")
+
+
+class Land(Mode):
+    number, name, armable = CopterMode.LAND, "LAND", False
+
+    def enter(self, v):
+        v.reset_horizontal()
+        self.hold_ne = tuple(v.est.pos_ne_m) if v.position_ok() else None
+        if v.armed and not v.airborne:
+            v.disarm_landed("LAND")
+
+    @property
+    def guided_enabled(self) -> bool:
+        return self.hold_ne is not None
+
+    def run(self, v, dt_s):
+        if self.hold_ne is not None and v.position_ok():
+            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
+        else:
+            self.hold_ne = None
+            v.command_attitude(0.0, 0.0)     # no position: land level, drift with the wind
+        v.hold_heading()
+        if v.land_descent(dt_s):
+            v.disarm_landed("LAND")
+
+
+MODES: dict[int, type[Mode]] = {m.number: m for m in
+                                (Stabilize, AltHold, Auto, Guided, Loiter, Rtl, Land, Brake)}
+MODE_NAMES = {n: m.name for n, m in MODES.items()}

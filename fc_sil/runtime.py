@@ -1,0 +1,170 @@
+"""The SIL FC program's loop: sensor ring -> FlightCore -> actuator ring.
+
+`FcLoop.poll()` consumes whatever the sensor ring holds in one batch, runs the
+C core over it (estimator and rate loop per IMU sample, PWM every 2.5 ms of sim
+time), publishes the PWM, and acknowledges the lockstep step. The same poll
+serves `silbridge fc` (its own process, `run_fc`) and `silbridge fly
+--processes 1` (polled by the bridge right after each publish).
+
+The FC never blocks on input (paper 3.4): when the ring is empty it returns,
+and the process driver waits with spin -> yield -> sleep so two processes on
+two cores do not starve each other. It watches the bridge through the segment
+and leaves with a clear message when the bridge dies.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from silbridge.shm import lockstep as ls
+from silbridge.shm.records import FLAG_STEP_END, RECORD_DTYPE
+
+_NS = 1_000_000_000
+
+
+class FcLost(Exception):
+    """The bridge died or vanished while the FC was running."""
+
+    user_facing = True
+
+
+class _Series:
+    """Bounded int64 sample store (keeps the newest `cap` samples, cap a power of two)."""
+
+    def __init__(self, cap: int = 1 << 20):
+        self.buf = np.empty(cap, dtype=np.int64)
+        self.mask = cap - 1
+        self.n = 0
+
+    def add(self, v: int) -> None:
+        self.buf[self.n & self.mask] = v
+        self.n += 1
+
+    def values(self) -> np.ndarray:
+        return self.buf[: min(self.n, len(self.buf))]
+
+    def percentiles_us(self, qs=(50, 99)) -> dict:
+        v = self.values()
+        if len(v) == 0:
+            return {f"p{q}": None for q in qs}
+        p = np.percentile(v, qs) / 1e3
+        return {f"p{q}": float(x) for q, x in zip(qs, p)}
+
+
+class FcLoop:
+    """Poll the sensor ring once; see module docstring."""
+
+    def __init__(self, core, segment, *, supervisor=None, sink=None, batch: int = 8192):
+        self.core = core
+        self.seg = segment
+        self.supervisor = supervisor
+        self.sink = sink
+        self.buf = np.zeros(batch, dtype=RECORD_DTYPE)
+        # Outputs preallocated for the largest batch: step_batch then allocates nothing.
+        from silbridge.fc_sil.status import STATUS_DTYPE
+        from silbridge.shm.records import PWM_DTYPE
+        self._pwm_out = np.zeros(batch, dtype=PWM_DTYPE)
+        self._status_out = np.zeros(batch, dtype=STATUS_DTYPE)
+        # Column views: scalar reads from them avoid building numpy records.
+        self._flags = self.buf["flags"]
+        self._sim_ns = self.buf["sim_ns"]
+        self._wall_ns = self.buf["wall_ns"]
+        self.latency_ns = _Series()
+        self.period_ns = _Series()
+        self.e2e_ns = _Series()
+        self.polls = 0
+        self.records = 0
+        self.pwm_published = 0
+        self._prev_consume = 0
+        self.last_sim_ns = 0
+
+    def poll(self) -> int:
+        n = self.seg.sensors.pop_into(self.buf)
+        if n == 0:
+            return 0
+        consume = time.monotonic_ns()
+        recs = self.buf[:n]
+        pwm, status = self.core.step_batch(recs, self._pwm_out, self._status_out)
+        last = n - 1
+        newest_wall = int(self._wall_ns[last])
+        newest_sim = int(self._sim_ns[last])
+        pwm_wall = 0
+        if len(pwm):
+            self.seg.actuators.push_batch(pwm)
+            pwm_wall = time.monotonic_ns()
+            self.pwm_published += len(pwm)
+            self.e2e_ns.add(pwm_wall - newest_wall)
+        if self._flags[last] & FLAG_STEP_END:
+            self.last_sim_ns = newest_sim
+            self.seg.set_word(ls.FC_SIM_NS, newest_sim)
+        self.latency_ns.add(consume - newest_wall)
+        if self._prev_consume:
+            self.period_ns.add(consume - self._prev_consume)
+        self._prev_consume = consume
+        self.polls += 1
+        self.records += n
+        if self.sink is not None:
+            self.sink.fc_batch(recs, pwm, status, consume, pwm_wall, newest_sim, newest_wall)
+        if self.supervisor is not None:
+            self.supervisor.after_batch(self, recs, pwm, status)
+        return n
+
+    def summary(self, nominal_period_ns: float | None = None) -> dict:
+        """Latency and jitter figures (us) for the run summary."""
+        periods = self.period_ns.values()
+        if nominal_period_ns is None and len(periods):
+            nominal_period_ns = float(np.median(periods))
+        if len(periods) and nominal_period_ns:
+            dev = np.abs(periods - nominal_period_ns) / 1e3
+            jitter = {"p50": float(np.percentile(dev, 50)), "p99": float(np.percentile(dev, 99))}
+        else:
+            jitter = {"p50": None, "p99": None}
+        return {
+            "latency_us": self.latency_ns.percentiles_us(),
+            "e2e_us": self.e2e_ns.percentiles_us(),
+            "jitter_us": jitter,
+            "polls": self.polls,
+            "records": self.records,
+            "pwm_published": self.pwm_published,
+        }
+
+
+def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print) -> dict:
+    """Drive an FcLoop in its own process until the bridge says STOP.
+
+    Returns the FC summary. Raises FcLost when the bridge dies mid-run.
+    """
+    seg = loop.seg
+    seg.set_word(ls.FC_STATE, ls.FC_STATE_READY)
+    lockstep = seg.word(ls.RUN_MODE) == ls.MODE_LOCKSTEP
+    dt_ns = seg.word(ls.PHYSICS_DT_NS)
+    imu_hz = seg.word(ls.IMU_HZ)
+    try:
+        while True:
+            if loop.poll():
+                seg.beat()
+                continue
+            if seg.word(ls.STOP):
+                # Drain what is left so the last step is answered.
+                while loop.poll():
+                    pass
+                break
+            if not seg.sensors.wait(wait_slice_s):
+                seg.beat()
+                if seg.word(ls.STOP):
+                    continue
+                if not seg.peer_alive():
+                    raise FcLost("the bridge process is gone; the FC stops. Restart "
+                                 "`silbridge bridge` (or use `silbridge fly`)")
+        seg.set_word(ls.FC_STATE, ls.FC_STATE_DONE)
+    except BaseException:
+        seg.set_word(ls.FC_STOP, 1)
+        seg.set_word(ls.FC_STATE, ls.FC_STATE_FAILED)
+        raise
+    nominal = (_NS / imu_hz) if (not lockstep and imu_hz) else None
+    # A realtime FC cycle is one physics step (the bridge publishes a step at once).
+    if nominal is not None and dt_ns:
+        nominal = float(dt_ns)
+    return loop.summary(nominal)

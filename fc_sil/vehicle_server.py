@@ -1,0 +1,85 @@
+"""Build a MAVLink-served Vehicle: parameter store, .parm file, mission file, GcsServer.
+
+``start_mavlink_vehicle(core, MavlinkOptions(...))`` is what `silbridge fc` and `silbridge
+fly --realtime` call: parameters come from the declaration defaults, then the `--params`
+file (if it exists; it is created by the first save), then `--param NAME=VALUE` overrides;
+the server opens every endpoint at once (a busy port fails here, with a clear message) and
+serves on its own thread; the vehicle is returned ready to be the FcLoop's supervisor.
+Call ``vehicle_close(vehicle)`` at the end (writes pending parameter changes, closes sockets).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from dataclasses import dataclass, field
+
+from .errors import ParamError
+from .param_store import CoreParamStore
+from .vehicle import Vehicle
+
+log = logging.getLogger(__name__)
+
+
+class VehicleSetupError(Exception):
+    user_facing = True
+
+
+@dataclass
+class MavlinkOptions:
+    endpoints: list = field(default_factory=list)   # mavlink.endpoints.Endpoint or URL strings
+    param_file: str | None = None                   # --params FILE (.parm, saved atomically)
+    mission_file: str | None = None                 # --mission FILE (QGC WPL 110)
+    serve: bool = True                              # False: the vehicle without a server
+
+
+def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None = None,
+                          sink=None, out=None) -> Vehicle:
+    from silbridge.mavlink.errors import MissionFileError, ParamFileError
+    from silbridge.mavlink.mission_store import MissionStore, home_item
+    from silbridge.mavlink.params_file import load_into_store
+    from silbridge.mavlink.server import GcsServer
+    from silbridge.mavlink.wpl import load_wpl
+
+    store = CoreParamStore(core)
+    problems: list[str] = []
+    if opts.param_file:
+        try:
+            problems += load_into_store(opts.param_file, store)
+        except ParamFileError as exc:
+            raise VehicleSetupError(str(exc)) from None
+    for name, value in (overrides or {}).items():
+        err = store.set(name, value)
+        if err:
+            raise ParamError(f"--param {name}={value:g}: {err}")
+    store.apply()
+    missions = MissionStore()
+    if opts.mission_file and os.path.exists(opts.mission_file):
+        try:
+            items = load_wpl(opts.mission_file)
+        except MissionFileError as exc:
+            raise VehicleSetupError(str(exc)) from None
+        if items and missions.replace(items) != 0:
+            raise VehicleSetupError(f"{opts.mission_file}: the mission holds an item this "
+                                    f"vehicle cannot fly; fix the file or remove --mission")
+    vehicle = Vehicle(core, store, sink=sink, mission_file=opts.mission_file)
+    vehicle.mission.set_items(missions.items() if missions.count() > 1 else (home_item(),),
+                              vehicle)
+    for p in problems:
+        log.warning("parameter file: %s", p)
+        if out is not None:
+            out(f"parameter file: {p}")
+    if opts.serve:
+        sysid = int(store.get("SYSID_THISMAV")[0])
+        server = GcsServer(vehicle, store, opts.endpoints or None, sysid=sysid, compid=1,
+                           param_file=opts.param_file, missions=missions)
+        vehicle.attach_server(server)
+        server.start()
+        for p in problems[:10]:
+            server.send_statustext(4, p[:150])
+    return vehicle
+
+
+def vehicle_close(vehicle: Vehicle) -> None:
+    if vehicle.server is not None:
+        vehicle.server.stop()

@@ -1,0 +1,141 @@
+/*
+ * sb_segment.h - the shared-memory segment that the bridge (owner) creates
+ * and the SIL FC (peer) attaches: a one-page header followed by the slots of
+ * two rings (sensors: owner -> peer, actuators: peer -> owner).
+ *
+ * Publication: the owner creates the POSIX object exclusively (mode 0600),
+ * takes an open-file-description write lock on it for its whole life, sizes
+ * and fills it, and stores `magic` last with release. A peer trusts nothing
+ * until it has read that magic with acquire. A crashed owner's lock vanishes
+ * with its process, which is how a stale segment is told from a live one
+ * (the pid is kept for messages and for the peer's cheap liveness check).
+ *
+ * Ownership of the header words: identity line and ring config - owner,
+ * before publication; owner line - owner; peer line - peer; each lockstep
+ * word - whichever side the protocol (shm/lockstep.py) names.
+ *
+ * All functions return an sb_seg_status; on failure `diag` says why.
+ * This file and shm/src/segment.c are the only OS-facing code of the ring.
+ */
+#ifndef SB_SEGMENT_H
+#define SB_SEGMENT_H
+
+#include <stdatomic.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sb_records.h"
+#include "sb_ring.h"
+
+#define SB_SEG_MAGIC 0x314D485342494C53ull /* "SLIBSHM1" read little-endian */
+#define SB_SEG_VERSION 1u
+#define SB_SEG_WORDS 8u
+#define SB_SEG_HEADER_BYTES 4096u
+#define SB_SEG_NAME_MAX 64u
+#define SB_SEG_PREFIX "/silbridge-"
+
+enum sb_seg_ring { SB_RING_SENSORS = 0, SB_RING_ACTUATORS = 1, SB_RING_COUNT = 2 };
+
+enum sb_seg_status {
+    SB_SEG_OK = 0,
+    SB_SEG_E_NAME,        /* instance name invalid */
+    SB_SEG_E_CONFIG,      /* slot counts invalid */
+    SB_SEG_E_MISSING,     /* no segment with that name */
+    SB_SEG_E_CREATING,    /* exists but not yet published (retry shortly) */
+    SB_SEG_E_BUSY,        /* a live owner already holds that name */
+    SB_SEG_E_STALE,       /* the owner is gone (crashed or closed without unlink) */
+    SB_SEG_E_PERM,        /* permission denied */
+    SB_SEG_E_MAGIC,       /* not a silbridge segment */
+    SB_SEG_E_VERSION,     /* segment format version differs */
+    SB_SEG_E_LAYOUT,      /* struct layout hash or size differs */
+    SB_SEG_E_PEER_BUSY,   /* another live peer is attached */
+    SB_SEG_E_OS           /* other system error, see diag.err_no */
+};
+
+typedef struct sb_seg_diag {
+    int err_no;              /* errno of the failing call, 0 if none */
+    int32_t pid;             /* owner (or busy peer) pid involved */
+    uint32_t found_version;  /* version found in the segment */
+    uint64_t found_magic;
+    uint64_t found_hash;     /* layout hash found in the segment */
+    char what[48];           /* failing call, e.g. "shm_open" */
+} sb_seg_diag;
+
+typedef struct sb_seg_header {
+    /* Line 0: identity, immutable once magic is published. */
+    _Atomic uint64_t magic;
+    uint32_t version;
+    uint32_t header_bytes;
+    uint64_t layout_hash;
+    uint64_t total_bytes;
+    int64_t created_unix_ns; /* CLOCK_REALTIME at creation [ns] */
+    int64_t created_mono_ns; /* CLOCK_MONOTONIC at creation [ns] */
+    int32_t owner_pid;
+    uint32_t pad0[3];
+    /* Line 1: owner. */
+    _Alignas(SB_CACHE_LINE) _Atomic uint64_t owner_heartbeat;
+    _Atomic uint32_t owner_closed; /* 1 after the owner closed its mapping */
+    uint32_t pad1[13];
+    /* Line 2: peer. */
+    _Alignas(SB_CACHE_LINE) _Atomic uint64_t peer_heartbeat;
+    _Atomic uint64_t peer_attaches; /* how many times a peer attached */
+    _Atomic int32_t peer_pid;       /* 0 until a peer attaches */
+    _Atomic uint32_t peer_closed;   /* 1 after the peer closed its mapping */
+    uint32_t pad2[10];
+    /* Lines 3..10: lockstep words, one per line so their writers never share. */
+    struct {
+        _Alignas(SB_CACHE_LINE) _Atomic uint64_t value;
+    } words[SB_SEG_WORDS];
+    /* Lines 11..16: ring control blocks. */
+    sb_ring_ctl rings[SB_RING_COUNT];
+} sb_seg_header;
+
+_Static_assert(sizeof(sb_seg_header) <= SB_SEG_HEADER_BYTES, "header fits its page");
+_Static_assert(offsetof(sb_seg_header, owner_heartbeat) == 1 * SB_CACHE_LINE, "owner line");
+_Static_assert(offsetof(sb_seg_header, peer_heartbeat) == 2 * SB_CACHE_LINE, "peer line");
+_Static_assert(offsetof(sb_seg_header, words) == 3 * SB_CACHE_LINE, "words start on line 3");
+_Static_assert(sizeof(((sb_seg_header *)0)->words[0]) == SB_CACHE_LINE, "one word per line");
+_Static_assert(sizeof(_Atomic int32_t) == 4, "atomic pid is a plain int32");
+
+/* Process-local handle of a mapped segment. */
+typedef struct sb_segment {
+    sb_seg_header *hdr; /* == base */
+    void *base;
+    size_t size;
+    int fd;
+    int is_owner;
+    int32_t opener_pid; /* a forked child that inherited the handle only unmaps it */
+    uint64_t dev, ino; /* identity of the object, so close never unlinks a successor */
+    char shm_name[sizeof(SB_SEG_PREFIX) + SB_SEG_NAME_MAX];
+} sb_segment;
+
+/* FNV-1a over sizeof/offsetof of every shared struct: equal hashes mean both
+ * sides were built from the same layout. */
+uint64_t sb_layout_hash(void);
+
+/* Bytes a segment with these slot counts occupies. */
+uint64_t sb_segment_bytes(uint64_t sensor_slots, uint64_t actuator_slots);
+
+int sb_segment_create(sb_segment *seg, const char *name, uint64_t sensor_slots,
+                      uint64_t actuator_slots, int overwrite, int replace_stale,
+                      sb_seg_diag *diag);
+int sb_segment_attach(sb_segment *seg, const char *name, sb_seg_diag *diag);
+/* Unmap and mark this side closed (the owner's lock goes with its fd). */
+void sb_segment_close(sb_segment *seg);
+/* Owner: remove the name if it still refers to this object (before or after
+ * close); a successor's segment under the same name is left alone. */
+void sb_segment_unlink(const sb_segment *seg);
+/* Remove a segment whose owner is gone. SB_SEG_OK if removed, E_MISSING if
+ * none, E_BUSY if its owner lives. */
+int sb_segment_remove_stale(const char *name, sb_seg_diag *diag);
+
+/* Liveness of the owner / the attached peer: pid exists, not marked closed,
+ * and (seen from the other side) its lock is still held - one fcntl. */
+int sb_segment_owner_alive(const sb_segment *seg);
+int sb_segment_peer_alive(const sb_segment *seg);
+int sb_pid_alive(int32_t pid);
+
+/* CLOCK_MONOTONIC [ns], the clock of every record's wall_ns. */
+int64_t sb_monotonic_ns(void);
+
+#endif /* SB_SEGMENT_H */

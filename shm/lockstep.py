@@ -1,0 +1,31 @@
+"""Meaning of the segment's lockstep words, shared by the bridge and the FC.
+
+The segment header holds eight uint64 words written with release and read with
+acquire ordering (Segment.set_word / word / wait_word). Each word has exactly
+one writer, so no read-modify-write is ever needed across processes.
+
+Lockstep handshake, per physics step k (sim time t_k = k * dt_ns):
+  bridge: publish every record of step k (last one flagged STEP_END),
+          then BRIDGE_SIM_NS := t_k
+  FC:     consume through the STEP_END record of step k, publish every PWM
+          due by t_k, then FC_SIM_NS := t_k
+  bridge: wait until FC_SIM_NS >= t_k, read the PWM, step physics to k+1.
+Sim time (not a step counter) is the currency so the FC need not know dt.
+"""
+
+BRIDGE_SIM_NS = 0   # writer: bridge. sim time of the last fully published step
+FC_SIM_NS = 1       # writer: FC. sim time through which the FC consumed and answered
+RUN_MODE = 2        # writer: bridge, before the FC attaches. see MODE_*
+STOP = 3            # writer: bridge. 1 = run finished, FC should exit cleanly
+FC_STATE = 4        # writer: FC. see FC_STATE_*
+PHYSICS_DT_NS = 5   # writer: bridge, before the FC attaches
+IMU_HZ = 6          # writer: bridge, before the FC attaches
+FC_STOP = 7         # writer: FC. 1 = FC is leaving (error or finished); bridge stops
+
+MODE_REALTIME = 0
+MODE_LOCKSTEP = 1
+
+FC_STATE_NONE = 0
+FC_STATE_READY = 1   # attached, core initialised, consuming
+FC_STATE_DONE = 2    # left after STOP
+FC_STATE_FAILED = 3  # left on an error (the FC prints why)

@@ -1,0 +1,113 @@
+"""The closed loop: real JSBSim, real FC core, real shared memory (issue 4 tests)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from silbridge.tools.flight import FlightOptions, fly_one_process, fly_two_processes
+
+
+def _opts(**kw) -> FlightOptions:
+    kw.setdefault("instance", f"t{os.getpid()}-{time.monotonic_ns() % 10**9}")
+    return FlightOptions(**kw)
+
+
+def test_hover_60s_holds_altitude_and_attitude():
+    s = fly_one_process(_opts(scenario="S1", duration_s=60.0, processes=1),
+                        out=lambda line: None)
+    assert not s["crashed"]
+    assert s["altitude_rms_m"] is not None and s["altitude_rms_m"] < 0.5, s
+    assert s["attitude_rms_deg"] is not None and s["attitude_rms_deg"] < 2.0, s
+    assert abs(s["rates_hz"]["imu"] - 1000) < 1 and abs(s["rates_hz"]["pwm"] - 400) < 1
+    assert s["overwritten"] == 0 and s["rejected"] == 0
+    assert all(c["ok"] for c in s["checks"])
+
+
+def test_same_seed_same_hash_and_one_vs_two_processes():
+    a = fly_one_process(_opts(scenario="S3", duration_s=4.0, seed=7, processes=1),
+                        out=lambda line: None)
+    b = fly_one_process(_opts(scenario="S3", duration_s=4.0, seed=7, processes=1),
+                        out=lambda line: None)
+    c = fly_two_processes(_opts(scenario="S3", duration_s=4.0, seed=7, processes=2),
+                          out=lambda line: None)
+    d = fly_one_process(_opts(scenario="S3", duration_s=4.0, seed=8, processes=1),
+                        out=lambda line: None)
+    assert a["trace_hash"] == b["trace_hash"] == c["trace_hash"]
+    assert d["trace_hash"] != a["trace_hash"]
+
+
+def _spawn(args):
+    return subprocess.Popen([sys.executable, "-m", "silbridge.tools", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _wait_running(bridge, timeout=20.0):
+    """Wait until the bridge reports its first check window (the loop is flying)."""
+    t_end = time.monotonic() + timeout
+    lines = []
+    while time.monotonic() < t_end:
+        line = bridge.stdout.readline()
+        if not line:
+            break
+        lines.append(line)
+        if line.startswith("check drops"):
+            return lines
+    raise AssertionError("bridge never reached its running state:\n" + "".join(lines)
+                         + bridge.stderr.read())
+
+
+def test_killed_fc_is_reported_by_the_bridge_within_a_second():
+    name = f"kill-fc-{os.getpid()}"
+    bridge = _spawn(["bridge", "--instance", name, "--realtime", "--duration", "60"])
+    fc = _spawn(["fc", "--instance", name])
+    try:
+        _wait_running(bridge)
+        t_kill = time.monotonic()
+        fc.send_signal(signal.SIGKILL)
+        bridge.wait(timeout=10)
+        elapsed = time.monotonic() - t_kill
+        err = bridge.stderr.read()
+        assert bridge.returncode == 2, err
+        assert "FC" in err
+        assert elapsed < 1.0 + 0.5, elapsed   # detection < 1 s, plus process exit
+    finally:
+        for p in (bridge, fc):
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+
+
+def test_killed_bridge_is_reported_by_the_fc_within_a_second():
+    name = f"kill-br-{os.getpid()}"
+    bridge = _spawn(["bridge", "--instance", name, "--realtime", "--duration", "60"])
+    fc = _spawn(["fc", "--instance", name])
+    try:
+        _wait_running(bridge)
+        t_kill = time.monotonic()
+        bridge.send_signal(signal.SIGKILL)
+        fc.wait(timeout=10)
+        elapsed = time.monotonic() - t_kill
+        err = fc.stderr.read()
+        assert fc.returncode == 2, err
+        assert "bridge" in err
+        assert elapsed < 1.5, elapsed
+    finally:
+        for p in (bridge, fc):
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+
+
+@pytest.mark.parametrize("imu_hz", [8000, 32000])
+def test_oversampled_imu_in_lockstep_loses_nothing(imu_hz):
+    s = fly_one_process(_opts(scenario="S1", duration_s=3.0, imu_hz=imu_hz, processes=1),
+                        out=lambda line: None)
+    assert s["overwritten"] == 0 and s["rejected"] == 0
+    assert abs(s["rates_hz"]["imu"] - imu_hz) < imu_hz * 1e-3
+    assert not s["crashed"]

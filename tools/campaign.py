@@ -1,0 +1,183 @@
+"""The paper's campaign (section 4.5): N lockstep runs per scenario, metrics per run.
+
+A run is fully described by a `RunSpec` (scenario, seed, duration, FC
+parameters, features switched off), so the same spec gives the same log bit
+for bit wherever it runs: in a local process pool (default) or on a Ray
+cluster. Each run writes its MCAP log and its metrics are computed from that
+log alone (tools/metrics.py), exactly as `silbridge analyze` would.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass, field
+from multiprocessing import get_context
+from pathlib import Path
+
+
+class CampaignError(Exception):
+    user_facing = True
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    scenario: str
+    run_index: int
+    seed: int
+    duration_s: float
+    log_path: str
+    imu_hz: float | None = None
+    params: tuple = ()            # ((name, value), ...) FC parameter overrides
+    features_off: tuple = ()      # FC stabilisation features switched off
+    variant: str = "full"         # ablation label
+    windows: tuple = ((0.0, 10.0), (10.0, 30.0), (30.0, 120.0), (90.0, 120.0))
+
+
+@dataclass
+class RunResult:
+    spec: RunSpec
+    metrics: dict = field(default_factory=dict)
+    summary: dict = field(default_factory=dict)
+    problems: list = field(default_factory=list)
+    wall_s: float = 0.0
+
+
+def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_seed: int = 1,
+               imu_hz=None, params=(), features_off=(), variant="full", windows=None):
+    specs = []
+    for sc in scenarios:
+        for i in range(runs):
+            name = Path(sc).stem if sc.endswith(".toml") else sc
+            log = out_dir / "logs" / variant / f"{name}_run{i:02d}.mcap"
+            specs.append(RunSpec(scenario=sc, run_index=i, seed=base_seed + i,
+                                 duration_s=duration_s, log_path=str(log), imu_hz=imu_hz,
+                                 params=tuple(params), features_off=tuple(features_off),
+                                 variant=variant,
+                                 windows=windows or RunSpec.windows))
+    return specs
+
+
+def run_one(spec: RunSpec) -> RunResult:
+    """Fly one run in this process, log it, and compute its metrics from the log."""
+    from .flight import FlightOptions, fly_one_process
+    from .integrity import check_log
+    from .mcap_log import read_log
+    from .metrics import Windows, compute_metrics
+
+    Path(spec.log_path).parent.mkdir(parents=True, exist_ok=True)
+    opts = FlightOptions(scenario=spec.scenario, duration_s=spec.duration_s, lockstep=True,
+                         processes=1, imu_hz=spec.imu_hz, seed=spec.seed,
+                         instance=f"bench-{os.getpid()}-{spec.variant}-{spec.run_index}",
+                         log_path=spec.log_path, params=dict(spec.params),
+                         features_off=spec.features_off)
+    t0 = time.perf_counter()
+    summary = fly_one_process(opts, out=lambda s: None)
+    log = read_log(spec.log_path)
+    problems = check_log(log)
+    w = spec.windows
+    metrics = compute_metrics(log, Windows(warmup=w[0], transient=w[1], analysis=w[2], yaw=w[3]))
+    return RunResult(spec=spec, metrics=metrics, summary=summary, problems=problems,
+                     wall_s=time.perf_counter() - t0)
+
+
+class Progress:
+    """A one-line progress bar on stderr (a line per 10 % when not a terminal)."""
+
+    def __init__(self, total: int, label: str, enabled: bool = True):
+        self.total = max(total, 1)
+        self.label = label
+        self.done = 0
+        self.enabled = enabled
+        self.tty = sys.stderr.isatty()
+        self.t0 = time.monotonic()
+        self._last_decile = -1
+
+    def step(self, note: str = "") -> None:
+        self.done += 1
+        if not self.enabled:
+            return
+        frac = self.done / self.total
+        elapsed = time.monotonic() - self.t0
+        eta = elapsed / frac - elapsed if frac > 0 else 0.0
+        bar = "#" * int(frac * 30)
+        line = (f"{self.label} [{bar:<30}] {self.done}/{self.total} runs, "
+                f"{elapsed:5.1f} s, eta {eta:4.0f} s {note}")
+        if self.tty:
+            print("\r" + line[:120], end="" if self.done < self.total else "\n",
+                  file=sys.stderr, flush=True)
+        elif int(frac * 10) != self._last_decile:
+            self._last_decile = int(frac * 10)
+            print(line, file=sys.stderr, flush=True)
+
+
+def run_campaign(specs, *, jobs: int | None = None, executor: str = "local",
+                 ray_address: str | None = None, progress: bool = True,
+                 label: str = "bench") -> list[RunResult]:
+    """Run every spec; results come back in spec order whatever finished first."""
+    if executor == "ray":
+        results = _run_ray(specs, ray_address, progress, label)
+    elif executor == "local":
+        results = _run_local(specs, jobs or os.cpu_count() or 1, progress, label)
+    else:
+        raise CampaignError(f"unknown executor {executor!r}: use local or ray")
+    bad = [r for r in results if r.problems]
+    if bad:
+        r = bad[0]
+        raise CampaignError(f"run {r.spec.scenario} #{r.spec.run_index} produced a log that "
+                            f"fails the integrity check: {r.problems[0]} ({r.spec.log_path})")
+    return results
+
+
+def _run_local(specs, jobs: int, progress: bool, label: str) -> list[RunResult]:
+    bar = Progress(len(specs), label, progress)
+    if jobs <= 1:
+        out = []
+        for s in specs:
+            out.append(run_one(s))
+            bar.step(s.scenario)
+        return out
+    results: dict[int, RunResult] = {}
+    # spawn: every worker starts clean (no inherited JSBSim or shared-memory state).
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn")) as pool:
+        futures = {pool.submit(run_one, s): i for i, s in enumerate(specs)}
+        for fut in as_completed(futures):
+            i = futures[fut]
+            results[i] = fut.result()
+            bar.step(specs[i].scenario)
+    return [results[i] for i in range(len(specs))]
+
+
+def _run_ray(specs, address: str | None, progress: bool, label: str) -> list[RunResult]:
+    try:
+        import ray
+    except ImportError:
+        raise CampaignError("the Ray executor needs Ray: pip install 'silbridge[ray]'") from None
+    started_here = not ray.is_initialized()
+    if started_here:
+        if address:
+            ray.init(address=address, log_to_driver=False)
+        else:
+            ray.init(num_cpus=os.cpu_count(), include_dashboard=False, log_to_driver=False)
+    try:
+        remote = ray.remote(num_cpus=1)(run_one)
+        refs = [remote.remote(s) for s in specs]
+        index = {ref: i for i, ref in enumerate(refs)}
+        bar = Progress(len(specs), label, progress)
+        results: dict[int, RunResult] = {}
+        pending = list(refs)
+        while pending:
+            ready, pending = ray.wait(pending, num_returns=1)
+            i = index[ready[0]]
+            results[i] = ray.get(ready[0])
+            bar.step(specs[i].scenario)
+        return [results[i] for i in range(len(specs))]
+    finally:
+        if started_here:
+            ray.shutdown()
+
+
+def spec_dict(spec: RunSpec) -> dict:
+    return asdict(spec)

@@ -1,0 +1,91 @@
+"""`silbridge bench`: the paper's campaign (Table 1) over local processes or Ray."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from .campaign import CampaignError, make_specs, run_campaign
+from .flight_args import parse_params
+from .report import write_report
+from .table1 import aggregate, markdown
+
+HELP = "run the paper's benchmark campaign (S1..S4, N runs) and print Table 1"
+
+
+def add_campaign_arguments(p) -> None:
+    p.add_argument("--scenarios", default="S1,S2,S3,S4",
+                   help="comma-separated scenario names or TOML files (default S1,S2,S3,S4)")
+    p.add_argument("--runs", type=int, default=20, help="runs per scenario (default 20)")
+    p.add_argument("--duration", type=float, default=120.0, metavar="S",
+                   help="simulated seconds per run (default 120)")
+    p.add_argument("--seed", type=int, default=1, help="seed of run 0; run i uses seed + i")
+    p.add_argument("--jobs", type=int, default=None,
+                   help="parallel runs (default: CPU count)")
+    p.add_argument("--executor", choices=("local", "ray"), default="local",
+                   help="local process pool (default) or a Ray cluster")
+    p.add_argument("--ray-address", default=None,
+                   help="Ray cluster address for --executor ray (default: start a local Ray)")
+    p.add_argument("--imu-hz", type=float, default=None, help="IMU rate (default 1000)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="FC parameter for every run, e.g. ATC_RAT_RLL_D=0.004 (repeatable)")
+    p.add_argument("--warmup", type=float, nargs=2, default=(0.0, 10.0), metavar=("A", "B"))
+    p.add_argument("--transient", type=float, nargs=2, default=(10.0, 30.0), metavar=("A", "B"))
+    p.add_argument("--analysis", type=float, nargs=2, default=(30.0, 120.0), metavar=("A", "B"))
+    p.add_argument("--yaw-window", type=float, nargs=2, default=(90.0, 120.0),
+                   metavar=("A", "B"))
+    p.add_argument("--out", default="bench-out", help="output folder (default bench-out)")
+    p.add_argument("--no-report", action="store_true", help="skip the plots and index page")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def add_arguments(p) -> None:
+    add_campaign_arguments(p)
+
+
+def campaign_inputs(args):
+    if args.runs < 1:
+        raise CampaignError("--runs must be >= 1")
+    if args.duration <= 0:
+        raise CampaignError("--duration must be > 0")
+    scenarios = [s.strip() for s in args.scenarios.split(",") if s.strip()]
+    if not scenarios:
+        raise CampaignError("--scenarios is empty: name at least one, e.g. S1")
+    windows = (tuple(args.warmup), tuple(args.transient), tuple(args.analysis),
+               tuple(args.yaw_window))
+    params = tuple(sorted(parse_params(args.param).items()))
+    return scenarios, windows, params
+
+
+def run(args) -> int:
+    scenarios, windows, params = campaign_inputs(args)
+    out_dir = Path(args.out)
+    specs = make_specs(scenarios, args.runs, args.duration, out_dir, base_seed=args.seed,
+                       imu_hz=args.imu_hz, params=params, windows=windows)
+    t0 = time.monotonic()
+    results = run_campaign(specs, jobs=args.jobs, executor=args.executor,
+                           ray_address=args.ray_address)
+    wall_s = time.monotonic() - t0
+    table = aggregate(results)
+    table.update({"runs": args.runs, "duration_s": args.duration, "wall_s": wall_s,
+                  "executor": args.executor, "params": dict(params),
+                  "sim_s_total": sum(r.summary.get("sim_s", 0.0) for r in results)})
+    md = markdown(table)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "table1.md").write_text(md + "\n")
+    (out_dir / "table1.json").write_text(json.dumps(table, indent=2) + "\n")
+    index = None
+    if not args.no_report:
+        index = write_report(results, md, table, out_dir)
+    if args.json:
+        print(json.dumps(table))
+    else:
+        print(md)
+        print(f"\n{len(results)} runs, {table['sim_s_total']:.0f} s simulated in "
+              f"{wall_s:.1f} s wall ({table['sim_s_total'] / max(wall_s, 1e-9):.0f}x real "
+              f"time overall)")
+        print(f"logs and tables in {out_dir}/" + (f", report {index}" if index else ""),
+              file=sys.stdout)
+    return 0

@@ -1,0 +1,56 @@
+"""`silbridge fc`: the SIL flight-controller program (attaches to a bridge's segment)."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from silbridge.shm import Segment
+
+from .flight import FlightOptions, close_fc_loop, make_fc_loop, mavlink_options
+from .flight_args import add_fc_arguments, add_mavlink_arguments, mavlink_wanted, parse_params
+
+HELP = "the SIL FC program: attach to a running bridge and fly its vehicle"
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--instance", default="silbridge",
+                   help="shared-memory instance name of the bridge (default silbridge)")
+    p.add_argument("--attach-timeout", type=float, default=10.0, metavar="S",
+                   help="wait this long for the bridge's segment (default 10 s)")
+    add_fc_arguments(p)
+    add_mavlink_arguments(p)
+    p.add_argument("--json", action="store_true", help="print the FC summary as JSON")
+
+
+def run(args) -> int:
+    from silbridge.fc_sil.runtime import run_fc
+
+    params = parse_params(args.param)
+    out = (lambda s: print(s, file=sys.stderr)) if args.json else print
+    from silbridge.shm import lockstep as ls
+
+    with Segment.attach(args.instance, timeout_s=args.attach_timeout) as seg:
+        # MAVLink by default when the bridge runs in real time (see add_mavlink_arguments)
+        realtime = seg.word(ls.RUN_MODE) != ls.MODE_LOCKSTEP
+        mav_opts = mavlink_options(FlightOptions(
+            mavlink=mavlink_wanted(args, realtime), gcs_urls=tuple(args.gcs),
+            no_default_gcs=args.no_default_gcs, param_file=args.param_file,
+            mission_file=args.mission_file))
+        loop = make_fc_loop(seg, params=params, features_off=tuple(args.feature_off),
+                            mavlink=mav_opts, out=out)
+        try:
+            summary = run_fc(loop, out=out)
+        finally:
+            close_fc_loop(loop)
+        if mav_opts is not None:
+            summary["mavlink"] = loop.supervisor.summary()
+    if args.json:
+        print(json.dumps(summary), flush=True)
+    else:
+        lat, jit = summary["latency_us"], summary["jitter_us"]
+        print(f"FC consumed {summary['records']} records in {summary['polls']} polls, "
+              f"published {summary['pwm_published']} PWM")
+        print(f"sensor->FC latency p50 {lat['p50']} us p99 {lat['p99']} us; "
+              f"jitter p50 {jit['p50']} us p99 {jit['p99']} us")
+    return 0

@@ -1,0 +1,100 @@
+"""Command-line options shared by `silbridge bridge`, `fc` and `fly`."""
+
+from __future__ import annotations
+
+import argparse
+
+from .flight import FlightOptions
+
+
+class OptionError(ValueError):
+    user_facing = True
+
+
+def add_flight_arguments(p: argparse.ArgumentParser, *, processes: bool) -> None:
+    p.add_argument("--scenario", default="S1",
+                   help="built-in scenario name (S1..S5) or a TOML file (default S1)")
+    p.add_argument("--duration", type=float, default=None, metavar="S",
+                   help="simulated seconds (default: the scenario's duration)")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--lockstep", action="store_true",
+                      help="deterministic, as fast as possible (default)")
+    mode.add_argument("--realtime", action="store_true", help="pace to the wall clock")
+    mode.add_argument("--speed", type=float, default=None, metavar="X",
+                      help="real time at X times the wall clock")
+    if processes:
+        p.add_argument("--processes", type=int, choices=(1, 2), default=2,
+                       help="FC in its own process (2, default) or in the bridge's (1)")
+    p.add_argument("--imu-hz", type=float, default=None, metavar="N",
+                   help="IMU rate (a whole multiple of the 1 kHz physics rate)")
+    p.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
+    p.add_argument("--instance", default=None,
+                   help="shared-memory instance name (several runs can coexist)")
+    add_fc_arguments(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def add_fc_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="set an FC parameter (repeatable), e.g. ATC_RAT_RLL_D=0.004")
+    p.add_argument("--feature-off", action="append", default=[], metavar="FEATURE",
+                   help="switch a stabilisation feature off (ablation), repeatable")
+
+
+def add_mavlink_arguments(p: argparse.ArgumentParser) -> None:
+    """The MAVLink vehicle's options (`silbridge fly` and `silbridge fc`)."""
+    from silbridge.mavlink.endpoints import add_gcs_arguments
+
+    onoff = p.add_mutually_exclusive_group()
+    onoff.add_argument("--mavlink", dest="mavlink", action="store_true", default=None,
+                       help="fly the MAVLink vehicle: disarmed on the ground, GCS control only "
+                            "(default in real time; off in lockstep so benchmarks never depend "
+                            "on a GCS)")
+    onoff.add_argument("--no-mavlink", dest="mavlink", action="store_false",
+                       help="no MAVLink: the scenario's scripted take-off and setpoints")
+    add_gcs_arguments(p)
+    p.add_argument("--params", dest="param_file", default=None, metavar="FILE",
+                   help="ArduPilot .parm file: loaded at start, saved atomically after "
+                        "every PARAM_SET (created if missing)")
+    p.add_argument("--mission", dest="mission_file", default=None, metavar="FILE",
+                   help="QGC WPL 110 mission: loaded at start, saved after every upload")
+
+
+def mavlink_wanted(args, realtime: bool) -> bool:
+    """--mavlink / --no-mavlink, else on in real time and off in lockstep."""
+    m = getattr(args, "mavlink", None)
+    return realtime if m is None else bool(m)
+
+
+def parse_params(items: list[str]) -> dict:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise OptionError(f"--param wants NAME=VALUE, got {item!r}")
+        try:
+            out[name.strip().upper()] = float(value)
+        except ValueError:
+            raise OptionError(f"--param {name}: {value!r} is not a number") from None
+    return out
+
+
+def options_from_args(args) -> FlightOptions:
+    if args.speed is not None and args.speed <= 0:
+        raise OptionError("--speed must be > 0")
+    if args.duration is not None and args.duration <= 0:
+        raise OptionError("--duration must be > 0")
+    if args.imu_hz is not None and args.imu_hz <= 0:
+        raise OptionError("--imu-hz must be > 0")
+    realtime = bool(args.realtime or args.speed is not None)
+    mav_extra = {}
+    if hasattr(args, "no_default_gcs"):
+        mav_extra = dict(mavlink=mavlink_wanted(args, realtime), gcs_urls=tuple(args.gcs),
+                         no_default_gcs=args.no_default_gcs, param_file=args.param_file,
+                         mission_file=args.mission_file)
+    return FlightOptions(
+        scenario=args.scenario, duration_s=args.duration, lockstep=not realtime,
+        speed=args.speed if args.speed is not None else 1.0,
+        processes=getattr(args, "processes", 2), imu_hz=args.imu_hz, seed=args.seed,
+        instance=args.instance, params=parse_params(args.param),
+        features_off=tuple(args.feature_off), **mav_extra)

@@ -1,0 +1,87 @@
+"""Generate docs/params.md from the one parameter declaration (fc_params.def).
+
+    python -m silbridge.tools.gen_param_doc            # rewrite docs/params.md
+    python -m silbridge.tools.gen_param_doc --check    # exit 1 if it is stale
+
+tests/fc_sil/test_params.py runs the check, so the page cannot drift from the
+declaration.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from silbridge.fc_sil.params import ABLATION_FEATURES, DEF_PATH, FEATURES, PARAMS
+
+DOC_PATH = Path(__file__).resolve().parent.parent / "docs" / "params.md"
+
+
+def _num(v: float, typ: str) -> str:
+    return str(int(v)) if typ != "FLOAT" else f"{v:g}"
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|")
+
+
+def render() -> str:
+    out = [
+        "# silbridge flight-controller parameters",
+        "",
+        "Generated from `fc_sil/core/fc_params.def` by `tools/gen_param_doc.py`; do not edit "
+        "by hand (`python -m silbridge.tools.gen_param_doc` rewrites it).",
+        "",
+        "ArduCopter 4.5 names and defaults where ArduCopter has the parameter; `SB_` names for "
+        "the paper's own features. The index is the permanent slot (never renumbered). "
+        "*Where*: `core` parameters live in the C core's struct (validated and effective at "
+        "once, filters recomputed); `host` parameters are kept by the Python runtime.",
+        "",
+        "Deliberate departures from ArduCopter defaults: `ATC_ANG_YAW_P` 0 (the paper's yaw "
+        "rate damping; set > 0 for heading hold) and `MOT_SLEW_UP_TIME`/`MOT_SLEW_DN_TIME` "
+        "0.05 s (ArduCopter 0 = off) so the paper's slew limit acts by default.",
+        "",
+        "| Index | Name | Type | Default | Min | Max | Unit | Where | Description |",
+        "|---:|---|---|---:|---:|---:|---|---|---|",
+    ]
+    for p in PARAMS:
+        out.append(f"| {p.index} | `{p.name}` | {p.type} | {_num(p.default, p.type)} | "
+                   f"{_num(p.min, p.type)} | {_num(p.max, p.type)} | {_cell(p.unit)} | "
+                   f"{'host' if p.host else 'core'} | {_cell(p.text)} |")
+    out += [
+        "",
+        "## Stabilisation features (ablation switches)",
+        "",
+        "`FlightCore.set_feature(name, on)` sets the enable parameter; the paper's ablation "
+        "switches the marked ones off one at a time, then all together.",
+        "",
+        "| Feature | Parameter | In the paper's ablation |",
+        "|---|---|---|",
+    ]
+    for name, param in FEATURES.items():
+        out.append(f"| `{name}` | `{param}` | {'yes' if name in ABLATION_FEATURES else 'no'} |")
+    out.append("")
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--check", action="store_true", help="exit 1 if docs/params.md is stale")
+    ap.add_argument("--output", type=Path, default=DOC_PATH)
+    args = ap.parse_args(argv)
+    text = render()
+    if args.check:
+        current = args.output.read_text() if args.output.exists() else ""
+        if current != text:
+            print(f"{args.output} is out of date with {DEF_PATH}; run "
+                  "`python -m silbridge.tools.gen_param_doc`", file=sys.stderr)
+            return 1
+        return 0
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    args.output.write_text(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
