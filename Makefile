@@ -11,6 +11,8 @@ PY      := $(VENV)/bin/python
 PIP     := $(PY) -m pip
 PYTHON  ?= python3
 BENCH_ARGS ?=
+BENCH_OUT  ?= bench-out
+SB      := $(VENV)/bin/silbridge
 
 .PHONY: setup sysdeps test bench clean
 
@@ -27,8 +29,12 @@ setup: $(PY) sysdeps
 test: setup
 	$(PY) -m pytest -q tests
 
+# The paper's protocol: S1..S4, N = 20 runs of 120 s each (Table 1), then the
+# transport comparison (Table 2). Change a gain and compare:
+#   make bench BENCH_ARGS="--param ATC_RAT_RLL_D=0.004" BENCH_OUT=bench-d004
 bench: setup
-	$(VENV)/bin/silbridge shm-bench $(BENCH_ARGS)
+	$(SB) bench --out $(BENCH_OUT) $(BENCH_ARGS)
+	$(SB) shm-bench
 
 clean:
 	rm -rf build *.egg-info shm/*.so fc_sil/*.so .pytest_cache

@@ -232,7 +232,7 @@ def _result(loop: BridgeLoop, cfg: BridgeRunConfig, checks, wall_ns: int, pacer)
     pwm_hz = pwm_rate_hz(loop, cfg)
     ring = {"sensors": loop.seg.sensors.stats(), "actuators": loop.seg.actuators.stats()}
     return BridgeResult(
-        sim_s=sim_s, wall_s=wall_s, steps=st.steps, published=sim.published_counts(),
+        sim_s=sim_s, wall_s=wall_s, steps=sim.step_index, published=sim.published_counts(),
         pwm_received=st.pwm_received, pwm_hz=pwm_hz, ring=ring, checks=checks,
         attitude_rms_deg=loop.attitude_rms_deg(), altitude_rms_m=loop.altitude_rms_m(),
         trace_hash=loop.trace_hash(), crashed=bool(sim.crashed),

@@ -89,6 +89,8 @@ class Simulator:
         self.gnss = Gnss(sc.gnss, seed, fdm.m_per_rad_lat, fdm.m_per_rad_lon)
         self.dist = Disturbances(sc, fdm, self.imu, self.dt_ns, self._event)
         self.setpoints = SetpointProgram(sc, self.dt_ns, math.radians(home.heading_deg))
+        # The scenario's current command (what the FC was told), for summaries.
+        self.command = {"roll_rad": 0.0, "pitch_rad": 0.0, "alt_m": 0.0}
         self._crash_descent_m_s = sc.physics.crash_descent_m_s
         self._cos_crash_tilt = math.cos(math.radians(sc.physics.crash_tilt_deg))
         self._flip_steps = int(_FLIP_LIMIT_S * physics_hz)
@@ -241,6 +243,11 @@ class Simulator:
             sb.SETPOINT.pack_into(buf.buf, count * 64, 8, 0, self._next_seq(8), sim_ns, 0,
                                   s_roll, s_pitch, s_yaw, s_alt, mask)
             count += 1
+            cmd = self.command
+            if mask & 1:
+                cmd["roll_rad"], cmd["pitch_rad"] = s_roll, s_pitch
+            if mask & 2:
+                cmd["alt_m"] = s_alt
 
         # Ground contact: integrator choice and crash detection.
         if on_ground != self._was_on_ground:

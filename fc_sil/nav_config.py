@@ -49,7 +49,7 @@ class NavConfig:
     gps_timeout_s: float = 1.0
     sens_timeout_s: float = 0.2
     pos_tc_s: float = 1.5
-    vel_tc_s: float = 0.5
+    vel_tc_s: float = 0.2
     arming_check: int = 1
     wp_yaw_behavior: int = 2
     compass_use: int = 1

@@ -83,7 +83,7 @@ class PositionEstimator:
 
     HISTORY_S = 1.0
 
-    def __init__(self, pos_tc_s: float = 1.5, vel_tc_s: float = 0.5, delay_s: float = 0.11):
+    def __init__(self, pos_tc_s: float = 1.5, vel_tc_s: float = 0.2, delay_s: float = 0.11):
         self.pos_tc_s = pos_tc_s
         self.vel_tc_s = vel_tc_s
         self.delay_s = delay_s

@@ -67,6 +67,7 @@ class FcLoop:
         from silbridge.shm.records import PWM_DTYPE
         self._pwm_out = np.zeros(batch, dtype=PWM_DTYPE)
         self._status_out = np.zeros(batch, dtype=STATUS_DTYPE)
+        self._step = core._c.step_batch
         # Column views: scalar reads from them avoid building numpy records.
         self._flags = self.buf["flags"]
         self._sim_ns = self.buf["sim_ns"]
@@ -86,22 +87,31 @@ class FcLoop:
             return 0
         consume = time.monotonic_ns()
         recs = self.buf[:n]
-        pwm, status = self.core.step_batch(recs, self._pwm_out, self._status_out)
+        # The C entry point directly: outputs are preallocated for the largest batch.
+        k = self._step(recs, self._pwm_out, self._status_out)
+        pwm = self._pwm_out[:k]
+        status = self._status_out[:k]
         last = n - 1
         newest_wall = int(self._wall_ns[last])
         newest_sim = int(self._sim_ns[last])
         pwm_wall = 0
-        if len(pwm):
+        if k:
             self.seg.actuators.push_batch(pwm)
             pwm_wall = time.monotonic_ns()
-            self.pwm_published += len(pwm)
-            self.e2e_ns.add(pwm_wall - newest_wall)
+            self.pwm_published += k
+            e2e = self.e2e_ns
+            e2e.buf[e2e.n & e2e.mask] = pwm_wall - newest_wall
+            e2e.n += 1
         if self._flags[last] & FLAG_STEP_END:
             self.last_sim_ns = newest_sim
             self.seg.set_word(ls.FC_SIM_NS, newest_sim)
-        self.latency_ns.add(consume - newest_wall)
+        lat = self.latency_ns
+        lat.buf[lat.n & lat.mask] = consume - newest_wall
+        lat.n += 1
         if self._prev_consume:
-            self.period_ns.add(consume - self._prev_consume)
+            per = self.period_ns
+            per.buf[per.n & per.mask] = consume - self._prev_consume
+            per.n += 1
         self._prev_consume = consume
         self.polls += 1
         self.records += n

@@ -463,6 +463,17 @@ class Vehicle:
     def snapshot(self):
         return build_snapshot(self)
 
+    def summary(self) -> dict:
+        """End-of-run figures for `silbridge fc --json`."""
+        out = {"mode": self.mode.name, "armed": self.armed, "outer_steps": self.steps,
+               "outer_step_us_mean": (self.step_wall_ns / self.steps / 1e3) if self.steps
+               else None, "setpoints_ignored": self.setpoints_ignored,
+               "statustext": [t for _, _, t in list(self.messages)[-20:]]}
+        if self.server is not None:
+            c = self.server.counters()
+            out["server"] = {k: v for k, v in c.items() if not isinstance(v, dict)}
+        return out
+
     def load_permille(self) -> int:
         """Share of wall time the outer loop used over the last second (SYS_STATUS load)."""
         start, used0, last = self._load_window

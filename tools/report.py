@@ -106,7 +106,7 @@ def box_plots(results, out_dir: Path) -> list[str]:
         if not any(data):
             continue
         fig, ax = plt.subplots(figsize=(6, 3))
-        ax.boxplot(data, labels=names)
+        ax.boxplot(data, tick_labels=names)
         ax.set_ylabel(f"{label} [{unit}]")
         ax.set_title(f"{label} per scenario ({len(results) // max(len(names), 1)} runs each)")
         fig.tight_layout()
