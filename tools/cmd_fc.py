@@ -20,6 +20,10 @@ def add_arguments(p) -> None:
                    help="wait this long for the bridge's segment (default 10 s)")
     add_fc_arguments(p)
     add_mavlink_arguments(p)
+    p.add_argument("--log", default=None, metavar="FILE.mcap",
+                   help="write the run's MCAP log from the FC side")
+    p.add_argument("--log-meta", default=None, metavar="FILE.json",
+                   help="start metadata for --log (config, scenario), as `fly` passes it")
     p.add_argument("--json", action="store_true", help="print the FC summary as JSON")
 
 
@@ -39,10 +43,13 @@ def run(args) -> int:
             mission_file=args.mission_file))
         loop = make_fc_loop(seg, params=params, features_off=tuple(args.feature_off),
                             mavlink=mav_opts, out=out)
+        sink = _open_log(args, loop)
         try:
             summary = run_fc(loop, out=out)
         finally:
             close_fc_loop(loop)
+            if sink is not None:
+                sink.close()
         if mav_opts is not None:
             summary["mavlink"] = loop.supervisor.summary()
     if args.json:
@@ -54,3 +61,21 @@ def run(args) -> int:
         print(f"sensor->FC latency p50 {lat['p50']} us p99 {lat['p99']} us; "
               f"jitter p50 {jit['p50']} us p99 {jit['p99']} us")
     return 0
+
+
+def _open_log(args, loop):
+    """The FC-side MCAP log of `fc --log` (fly --processes 2 --log passes the metadata)."""
+    if not args.log:
+        return None
+    from .run_log import RunLogSink
+
+    meta = {}
+    if args.log_meta:
+        with open(args.log_meta) as fh:
+            meta = json.load(fh)
+    meta["params"] = loop.core.params()
+    sink = RunLogSink(args.log, metadata=meta, fc_logs_pwm=True)
+    loop.sink = sink
+    if getattr(loop.supervisor, "sink", "absent") is None:
+        loop.supervisor.sink = sink
+    return sink

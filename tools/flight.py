@@ -131,7 +131,7 @@ def run_metadata(opts: FlightOptions, sc, sim, cfg, core) -> dict:
             "features_off": list(opts.features_off),
         },
         "scenario": sc.to_dict(),
-        "params": core.params(),
+        "params": core.params() if core is not None else {},
         "software": {"silbridge": _version()},
     }
 
@@ -200,6 +200,14 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
         for feature in opts.features_off:
             cmd += ["--feature-off", feature]
         cmd += mavlink_cli_args(opts)
+        if opts.log_path:
+            # The FC process writes the log (it sees every record and its own PWM);
+            # it adds the parameter set to the metadata the bridge side knows.
+            meta_path = f"{opts.log_path}.meta.json"
+            meta = run_metadata(opts, sc, sim, cfg, None)
+            with open(meta_path, "w") as fh:
+                json.dump(meta, fh)
+            cmd += ["--log", opts.log_path, "--log-meta", meta_path]
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
         try:
             res = run_bridge(sim, seg, cfg, peer_check=lambda: proc.poll() is None,
@@ -210,7 +218,11 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
                 proc.kill()
                 proc.wait()
     fc_summary = _last_json(stdout)
-    return summarise(opts, sc, sim, res, fc_summary)
+    summary = summarise(opts, sc, sim, res, fc_summary)
+    if opts.log_path:
+        os.unlink(f"{opts.log_path}.meta.json")
+        summary["log"] = opts.log_path
+    return summary
 
 
 def _last_json(text: str) -> dict:

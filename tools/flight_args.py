@@ -31,6 +31,9 @@ def add_flight_arguments(p: argparse.ArgumentParser, *, processes: bool) -> None
     p.add_argument("--instance", default=None,
                    help="shared-memory instance name (several runs can coexist)")
     add_fc_arguments(p)
+    if processes:
+        p.add_argument("--log", default=None, metavar="FILE.mcap",
+                       help="write the run's MCAP log (open it in Foxglove; `silbridge analyze`)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -97,4 +100,5 @@ def options_from_args(args) -> FlightOptions:
         speed=args.speed if args.speed is not None else 1.0,
         processes=getattr(args, "processes", 2), imu_hz=args.imu_hz, seed=args.seed,
         instance=args.instance, params=parse_params(args.param),
+        log_path=getattr(args, "log", None),
         features_off=tuple(args.feature_off), **mav_extra)

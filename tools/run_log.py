@@ -17,7 +17,10 @@ TIMING_CHANNEL = "/timing"
 
 
 class RunLogSink:
-    def __init__(self, path, *, metadata: dict):
+    def __init__(self, path, *, metadata: dict, fc_logs_pwm: bool = False):
+        # With the FC in its own process the bridge's PWM never reaches this
+        # writer: the FC then logs the PWM it published (fc_logs_pwm).
+        self.fc_logs_pwm = fc_logs_pwm
         self.writer = LogWriter(path, metadata=metadata)
         self.writer.declare(TIMING_CHANNEL, TIMING_DTYPE)
         self._prev_consume = 0
@@ -31,7 +34,8 @@ class RunLogSink:
         self._prev_consume = consume_ns
         # One call per cycle: about half the cost of separate writes (tools/log_bench.py).
         self.writer.write_cycle(recs, status,
-                                (newest_sim_ns, newest_wall_ns, consume_ns, pwm_wall_ns, period))
+                                (newest_sim_ns, newest_wall_ns, consume_ns, pwm_wall_ns, period),
+                                pwm if self.fc_logs_pwm else None)
         self.cost_ns += time.perf_counter_ns() - t0
 
     # -- bridge side ----------------------------------------------------------

@@ -111,3 +111,28 @@ def test_oversampled_imu_in_lockstep_loses_nothing(imu_hz):
     assert s["overwritten"] == 0 and s["rejected"] == 0
     assert abs(s["rates_hz"]["imu"] - imu_hz) < imu_hz * 1e-3
     assert not s["crashed"]
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_fly_log_is_complete_and_analyzable(tmp_path, processes):
+    from silbridge.tools.integrity import check_log
+    from silbridge.tools.mcap_log import read_log
+    from silbridge.tools.metrics import Windows, compute_metrics
+
+    log_path = tmp_path / f"run{processes}.mcap"
+    fly = fly_one_process if processes == 1 else fly_two_processes
+    s = fly(_opts(scenario="S1", duration_s=12.0, processes=processes, log_path=str(log_path)),
+            out=lambda line: None)
+    log = read_log(log_path)
+    assert check_log(log) == []
+    for ch in ("/imu", "/baro", "/mag", "/gnss", "/gt_att", "/gt_nav", "/pwm", "/fc/status",
+               "/timing"):
+        assert len(log.channels[ch]) > 0, ch
+    assert len(log.channels["/imu"]) == 12000
+    assert len(log.channels["/pwm"]) == pytest.approx(12 * 400, abs=2)
+    assert log.metadata["params"]["ATC_RAT_RLL_P"] == pytest.approx(0.135, rel=1e-6)
+    assert log.metadata["scenario"]["name"] == "S1"
+    m = compute_metrics(log, Windows(warmup=(0, 5), transient=(5, 8), analysis=(8, 12),
+                                     yaw=(10, 12)))
+    assert 0 <= m["att_rms_deg"] < 5 and m["sat_pct"] == 0
+    assert s["log"] == str(log_path)

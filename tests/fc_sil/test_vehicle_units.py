@@ -1,0 +1,222 @@
+"""The vehicle's building blocks on their own: estimator, controllers, navigator, battery,
+pilot input, parameter store (no simulator; fast)."""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import pytest
+
+from silbridge.fc_sil import params as P
+from silbridge.fc_sil.battery import BatteryConfig, BatteryModel
+from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.nav_pos import PosController, PosGains, accel_to_lean, sqrt_controller
+from silbridge.fc_sil.nav_wp import WaypointNav, WpSpeeds
+from silbridge.fc_sil.param_store import CoreParamStore
+from silbridge.fc_sil.pilot import PilotInput
+from silbridge.fc_sil.pos_est import GeoOrigin, PositionEstimator, quat_rotate_frd_to_ned
+
+G = 9.80665
+
+
+# ---- position estimator ------------------------------------------------------------------------
+
+def test_geo_origin_round_trip_and_scale():
+    o = GeoOrigin(473977420, 85455940, 488.0)
+    lat, lon = o.to_latlon_e7(100.0, -50.0)
+    n, e = o.to_ne(lat, lon)
+    assert n == pytest.approx(100.0, abs=0.02) and e == pytest.approx(-50.0, abs=0.02)
+    # one degree of latitude is ~111.3 km
+    assert o.to_ne(o.lat_e7 + 10_000_000, o.lon_e7)[0] == pytest.approx(111_319.5, rel=1e-3)
+
+
+def test_quat_rotation_of_gravity_reaction_when_pitched():
+    # pitched nose-down by 10 deg, hovering: the specific force (-g along body z) tilts forward
+    th = math.radians(-10.0)
+    q = (math.cos(th / 2), 0.0, math.sin(th / 2), 0.0)
+    f_ned = quat_rotate_frd_to_ned(q, (0.0, 0.0, -G / math.cos(th)))
+    assert f_ned[0] == pytest.approx(G * math.tan(-th), rel=1e-6)   # accelerating north
+    assert f_ned[2] == pytest.approx(-G, rel=1e-6)
+
+
+def _fix(t_ns, o, n, e, vn=0.0, ve=0.0, fix_type=3):
+    lat, lon = o.to_latlon_e7(n, e)
+    return {"sim_ns": t_ns, "lat_e7": lat, "lon_e7": lon, "alt_mm": 488000,
+            "vel_ned_m_s": (vn, ve, 0.0), "fix_type": fix_type, "satellites": 12}
+
+
+def test_estimator_tracks_constant_acceleration_with_delayed_fixes():
+    o = GeoOrigin(473977420, 85455940, 488.0)
+    est = PositionEstimator(pos_tc_s=1.5, vel_tc_s=0.2, delay_s=0.11)
+    a = 1.0                                  # m/s^2 north
+    th = math.atan(a / G)
+    q = (math.cos(-th / 2), 0.0, math.sin(-th / 2), 0.0)
+    f_body = (0.0, 0.0, -math.hypot(a, G))
+    dt_ns = 20_000_000
+    assert not est.fuse_gnss(_fix(0, o, 0.0, 0.0, fix_type=1))      # no 3D fix: ignored
+    t = 0
+    for k in range(1, 501):                  # 10 s
+        t = k * dt_ns
+        est.predict(t, 0.02, q, f_body)
+        if k % 5 == 0:                       # 10 Hz fixes describing the vehicle 110 ms ago
+            tm = (t - 110_000_000) / 1e9
+            est.fuse_gnss(_fix(t, o, 0.5 * a * tm * tm, 0.0, a * tm))
+    ts = t / 1e9
+    assert est.valid
+    assert est.vel_ne_m_s[0] == pytest.approx(a * ts, abs=0.1)
+    assert est.pos_ne_m[0] == pytest.approx(0.5 * a * ts * ts, abs=0.5)
+
+
+def test_estimator_learns_an_accelerometer_bias():
+    o = GeoOrigin(473977420, 85455940, 488.0)
+    est = PositionEstimator(pos_tc_s=1.5, vel_tc_s=0.2, delay_s=0.0)
+    q = (1.0, 0.0, 0.0, 0.0)
+    f_body = (0.3, 0.0, -G)                  # 0.3 m/s^2 of bias while standing still
+    for k in range(1, 3001):
+        t = k * 20_000_000
+        est.predict(t, 0.02, q, f_body)
+        if k % 5 == 0:
+            est.fuse_gnss(_fix(t, o, 0.0, 0.0))
+    assert est.acc_bias_ne_m_s2[0] == pytest.approx(0.3, abs=0.05)
+    assert abs(est.vel_ne_m_s[0]) < 0.05
+
+
+# ---- controllers ---------------------------------------------------------------------------------
+
+def test_sqrt_controller_is_linear_near_zero_and_braking_curve_far():
+    assert sqrt_controller(0.5, 1.0, 2.5) == pytest.approx(0.5)
+    far = sqrt_controller(100.0, 1.0, 2.5)
+    assert far == pytest.approx(math.sqrt(2 * 2.5 * (100.0 - 1.25)))
+    assert sqrt_controller(-100.0, 1.0, 2.5) == pytest.approx(-far)
+
+
+def test_accel_to_lean_signs_and_limit():
+    roll, pitch = accel_to_lean(2.0, 0.0, 0.0, math.radians(30))    # go north, facing north
+    assert pitch < 0 and abs(roll) < 1e-9                            # nose down
+    roll, pitch = accel_to_lean(0.0, 2.0, 0.0, math.radians(30))    # go east: roll right
+    assert roll > 0 and abs(pitch) < 1e-9
+    roll, pitch = accel_to_lean(2.0, 0.0, math.pi / 2, math.radians(30))   # facing east
+    assert roll < 0 and abs(pitch) < 1e-6                                   # roll left = north
+    _, pitch = accel_to_lean(50.0, 0.0, 0.0, math.radians(30))
+    assert pitch == pytest.approx(-math.radians(30))
+
+
+def test_position_controller_velocity_target_is_shaped_by_the_accel_limit():
+    pc = PosController(PosGains(accel_m_s2=2.5))
+    pc.reset((0.0, 0.0))
+    pc.update(0.02, (0.0, 0.0), (0.0, 0.0), target_pos=(100.0, 0.0), speed_max_m_s=10.0)
+    assert pc.vel_target[0] == pytest.approx(2.5 * 0.02)
+    for _ in range(500):
+        pc.update(0.02, (0.0, 0.0), (0.0, 0.0), target_pos=(100.0, 0.0), speed_max_m_s=10.0)
+    assert pc.vel_target[0] == pytest.approx(10.0)
+
+
+def test_waypoint_target_point_respects_speeds_and_stops_at_the_destination():
+    wp = WaypointNav(WpSpeeds(speed_m_s=5.0, up_m_s=1.0, dn_m_s=1.0, accel_m_s2=2.5,
+                              radius_m=2.0))
+    wp.set_destination((0.0, 0.0), 10.0, (30.0, 40.0), 20.0)
+    pos, alt = (0.0, 0.0), 10.0
+    for _ in range(3000):                    # the vehicle follows the target point exactly
+        tp, tv, talt = wp.update(0.02, pos, alt)
+        assert math.hypot(*tv) <= 5.0 + 1e-9
+        pos, alt = tp, talt
+    assert wp.reached(pos, alt)
+    assert pos == pytest.approx((30.0, 40.0)) and alt == pytest.approx(20.0)
+    # 10 m of climb at 1 m/s limits the along-track speed: 50 m / (10/51 of the way up)
+    assert wp.bearing_rad == pytest.approx(math.atan2(40.0, 30.0))
+
+
+# ---- battery and pilot ---------------------------------------------------------------------------
+
+def test_battery_sags_under_load_and_drains():
+    b = BatteryModel(BatteryConfig(capacity_mah=1000.0, cells=4, r_ohm=0.025,
+                                   i_motor_full_a=18.0, i_idle_a=0.6))
+    idle_v = b.voltage_v
+    b.update((1500,) * 4, 1.0)
+    assert b.current_a == pytest.approx(0.6 + 4 * 18.0 * 0.5 ** 1.5)
+    assert b.voltage_v < idle_v - b.current_a * 0.025 + 1e-3
+    for _ in range(3600):
+        b.update((1500,) * 4, 1.0)
+    assert b.remaining_pct == 0 and b.voltage_v < 4 * 3.3
+    assert b.consumed_mah > 1000.0
+
+
+def test_pilot_sticks_from_manual_control_and_rc_override():
+    p = PilotInput(clock=lambda: 100.0)
+    assert p.age_s() is None and not p.fresh(1.0)
+    p.manual_control(1000, -500, 250, 32767)         # full forward, half left, yaw unused
+    assert (p.pitch, p.roll, p.throttle, p.yaw) == (-1.0, -0.5, 0.25, 0.0)
+    p.rc_override((1500, 1000, 2000, 1750) + (0,) * 14)
+    assert (p.roll, p.pitch, p.throttle, p.yaw) == (0.0, -1.0, 1.0, 0.5)
+    p.rc_override((65535, 0, 1000, 65535) + (0,) * 14)   # 0/65535 keep the channel
+    assert (p.roll, p.pitch, p.throttle, p.yaw) == (0.0, -1.0, 0.0, 0.5)
+    assert p.fresh(1.0)
+
+
+# ---- parameter store -----------------------------------------------------------------------------
+
+def test_param_store_lists_every_declared_parameter_with_its_type():
+    store = CoreParamStore(FlightCore())
+    assert list(store.names()) == [p.name for p in P.PARAMS]
+    assert store.get("DISARM_DELAY") == (10, 4)          # INT16, reported as an integer
+    v, t = store.get("ATC_RAT_RLL_P")
+    assert t == 9 and v == pytest.approx(0.135)
+    with pytest.raises(KeyError):
+        store.get("NOT_A_PARAM")
+
+
+def test_param_store_echoes_at_once_and_applies_at_the_step_boundary():
+    core = FlightCore()
+    store = CoreParamStore(core)
+    assert store.set("ATC_RAT_RLL_P", 0.2) is None
+    assert store.get("ATC_RAT_RLL_P")[0] == pytest.approx(0.2)      # echo
+    assert core.get_param("ATC_RAT_RLL_P") == pytest.approx(0.135)   # not yet live
+    assert store.apply() == 1
+    assert core.get_param("ATC_RAT_RLL_P") == pytest.approx(0.2)
+    assert store.set("WPNAV_SPEED", 500) is None
+    store.apply()
+    assert core.get_param("WPNAV_SPEED") == 500
+
+
+def test_param_store_refuses_what_the_core_would_refuse():
+    core = FlightCore()
+    store = CoreParamStore(core)
+    assert "outside" in store.set("ATC_RAT_RLL_P", 5.0)
+    assert store.set("MOT_PWM_MIN", 1950) is not None        # MIN + 100 <= MAX
+    assert store.get("MOT_PWM_MIN")[0] == 1000
+    assert "integer" in store.set("DISARM_DELAY", 2.5)
+    assert store.apply() == 0
+    assert store.sets_refused == 3
+
+
+def test_param_store_set_from_another_thread_while_the_loop_steps():
+    import numpy as np
+
+    from silbridge.shm.records import Kind, empty
+    core = FlightCore()
+    store = CoreParamStore(core)
+    recs = empty(Kind.IMU, 64)
+    recs["sim_ns"] = np.arange(64) * 1_000_000
+    recs["accel_frd_m_s2"] = (0.0, 0.0, -G)
+    stop = threading.Event()
+
+    def gcs():
+        k = 0
+        while not stop.is_set():
+            store.set("ATC_RAT_RLL_D", 0.001 * (k % 10))
+            k += 1
+
+    th = threading.Thread(target=gcs)
+    th.start()
+    try:
+        for i in range(300):
+            r = recs.copy()
+            r["sim_ns"] += i * 64_000_000
+            core.step_batch(r.view(np.dtype((np.void, 64))))
+            store.apply()
+    finally:
+        stop.set()
+        th.join()
+    store.apply()
+    assert core.get_param("ATC_RAT_RLL_D") == pytest.approx(store.get("ATC_RAT_RLL_D")[0])
