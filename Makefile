@@ -34,6 +34,7 @@ test: setup
 #   make bench BENCH_ARGS="--param ATC_RAT_RLL_D=0.004" BENCH_OUT=bench-d004
 bench: setup
 	$(SB) bench --out $(BENCH_OUT) $(BENCH_ARGS)
+	$(SB) transport --out $(BENCH_OUT)/transport
 	$(SB) shm-bench
 
 clean:

@@ -23,6 +23,7 @@ from collections import deque
 
 from silbridge.bridge.frames import ned_to_frd
 from silbridge.bridge.noise import NormalRows
+from silbridge.mavlink import hil_quant
 
 
 class Schedule:
@@ -53,7 +54,10 @@ class Baro:
         self.filtered_pa = pressure0_pa
 
     def sample(self) -> float:
-        return self.filtered_pa + self.cfg.offset_pa + self.cfg.noise_pa * self.noise.next_row()[0]
+        pa = self.filtered_pa + self.cfg.offset_pa + self.cfg.noise_pa * self.noise.next_row()[0]
+        # On the grid HIL_SENSOR (float32 hPa) carries exactly, whatever the transport: the FC
+        # then reads the same pressure over shared memory and over MAVLink (same trajectory).
+        return hil_quant.pressure_pa(pa)
 
 
 class Mag:
@@ -102,7 +106,10 @@ class Gnss:
         lon_deg = math.degrees(lon_rad + e[1] / self.m_per_rad_lon)
         alt_m = alt_msl_m - e[2]
         v = c.vel_sigma_m_s
-        vel = (vel_ned_m_s[0] + v * n[3], vel_ned_m_s[1] + v * n[4], vel_ned_m_s[2] + v * n[5])
+        # Whole cm/s, as HIL_GPS carries it (same fix over shared memory and MAVLink).
+        q = hil_quant.velocity_m_s
+        vel = (q(vel_ned_m_s[0] + v * n[3]), q(vel_ned_m_s[1] + v * n[4]),
+               q(vel_ned_m_s[2] + v * n[5]))
         fix = (int(round(lat_deg * 1e7)), int(round(lon_deg * 1e7)), int(round(alt_m * 1000.0)),
                vel[0], vel[1], vel[2],
                min(65535, int(round(c.pos_sigma_h_m * 100.0))),

@@ -37,6 +37,8 @@ from silbridge.bridge.lowrate import Baro, Gnss, Mag
 from silbridge.bridge.noise import DEFAULT_BLOCK_ROWS
 from silbridge.bridge.scenario import draw_rng
 from silbridge.bridge.setpoints import SetpointProgram
+from silbridge.mavlink.hil_quant import down_m as _q_down
+from silbridge.mavlink.hil_quant import velocity_m_s as _q_vel
 from silbridge.shm.records import Kind
 
 _NS = 1_000_000_000
@@ -196,7 +198,11 @@ class Simulator:
         lat0, lon0, m_lat, m_lon, agl0 = self._home
         pn = (lat - lat0) * m_lat
         pe = (lon - lon0) * m_lon
-        pd = agl0 - hagl_m
+        # Truth as HIL_STATE_QUATERNION carries it (whole mm down, whole cm/s), whatever the
+        # transport: the FC blends truth altitude and climb, so it must read the same numbers
+        # over shared memory and over MAVLink. Dynamics use JSBSim's own state, not these.
+        pd = _q_down(agl0 - hagl_m)
+        gvn, gve, gvd = _q_vel(vn), _q_vel(ve), _q_vel(vd)
 
         if self._scalar_imu:
             ax, ay, az, gx, gy, gz, temp_c = self.imu.step_scalar(fx, fy, fz, wx, wy, wz,
@@ -205,7 +211,7 @@ class Simulator:
                 buf.buf, 0,
                 1, 0, seq[1] & 0xFFFFFFFF, sim_ns, 0, ax, ay, az, gx, gy, gz, temp_c, 0, 1, 0,
                 5, 0, seq[5] & 0xFFFFFFFF, sim_ns, 0, qw, qx, qy, qz, wx, wy, wz, fx, fy, fz,
-                6, 0, seq[6] & 0xFFFFFFFF, sim_ns, 0, pn, pe, pd, vn, ve, vd, on_ground)
+                6, 0, seq[6] & 0xFFFFFFFF, sim_ns, 0, pn, pe, pd, gvn, gve, gvd, on_ground)
             seq[1] += 1
             count = 3
         else:
@@ -213,7 +219,7 @@ class Simulator:
             sb.GT.pack_into(
                 buf.buf, count * 64,
                 5, 0, seq[5] & 0xFFFFFFFF, sim_ns, 0, qw, qx, qy, qz, wx, wy, wz, fx, fy, fz,
-                6, 0, seq[6] & 0xFFFFFFFF, sim_ns, 0, pn, pe, pd, vn, ve, vd, on_ground)
+                6, 0, seq[6] & 0xFFFFFFFF, sim_ns, 0, pn, pe, pd, gvn, gve, gvd, on_ground)
             count += 2
         seq[5] += 1
         seq[6] += 1

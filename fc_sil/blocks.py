@@ -97,10 +97,13 @@ class Mahony:
                  bias_rate_hz: float = _default("SB_BIAS_RATE"),
                  still_gyro_rad_s: float = _default("SB_STILL_GYRO"),
                  still_acc_g: float = _default("SB_STILL_ACC"),
-                 trust_ema: bool = True, bias: bool = True):
+                 trust_ema: bool = True, bias: bool = True,
+                 kp_gnss: float = _default("SB_AHRS_GPS_KP"),
+                 ki_gnss: float = _default("SB_AHRS_GPS_KI")):
         self._s = _state("mahony")
         _core.mahony_init(self._s, (kp, ki, kmag, trust_tc_s, trust_span_g, bias_rate_hz,
-                                    still_gyro_rad_s, still_acc_g, trust_ema, bias))
+                                    still_gyro_rad_s, still_acc_g, trust_ema, bias, kp_gnss,
+                                    ki_gnss))
 
     def set_attitude(self, q_wxyz) -> None:
         _core.mahony_set_attitude(self._s, tuple(float(v) for v in q_wxyz))
@@ -115,6 +118,12 @@ class Mahony:
     def set_accel_ref(self, accel_ned_m_s2) -> int:
         """Kinematic acceleration reference, NED [m/s^2]; expires after 0.5 s."""
         return _core.mahony_accel_ref(self._s, tuple(float(v) for v in accel_ned_m_s2))
+
+    def gnss(self, f_imu_ned_m_s2, f_gnss_ned_m_s2) -> int:
+        """GNSS-aided tilt: mean specific force over a past interval, measured (IMU rotated
+        by the estimate) and from GNSS velocity, NED; held 0.5 s (fc_mahony_gnss)."""
+        return _core.mahony_gnss(self._s, tuple(float(v) for v in f_imu_ned_m_s2),
+                                 tuple(float(v) for v in f_gnss_ned_m_s2))
 
     def state(self) -> dict:
         return _core.mahony_state(self._s)

@@ -471,7 +471,7 @@ class Vehicle:
                "statustext": [t for _, _, t in list(self.messages)[-20:]]}
         if self.server is not None:
             c = self.server.counters()
-            out["server"] = {k: v for k, v in c.items() if not isinstance(v, dict)}
+            out["server"] = c
         return out
 
     def load_permille(self) -> int:
@@ -496,7 +496,7 @@ class Vehicle:
         reason = new.enter(self)
         if reason:
             return reason
-        if new is not self.mode:
+        if new.number != self.mode.number:
             self.mode.exit(self)
         self.mode = new
         self.yaw_rate_cmd = None
@@ -547,7 +547,7 @@ class Vehicle:
         return ACCEPTED, None
 
     def set_mode(self, custom_mode: int):
-        if custom_mode == self.mode.number and custom_mode != CopterMode.AUTO:
+        if custom_mode == self.mode.number:
             return ACCEPTED, None
         reason = self._change_mode(custom_mode)
         return (FAILED, reason) if reason else (ACCEPTED, None)
@@ -574,7 +574,11 @@ class Vehicle:
     def mission_start(self, first: int, last: int):
         if 0 < first < len(self.mission.items):
             self.mission.current = first
-        reason = self._change_mode(CopterMode.AUTO)
+        if self.mode.number == CopterMode.AUTO:
+            # MISSION_START in AUTO (MAVSDK sends it after the mode change): (re)start
+            reason = self.mission.start(self, first if first > 0 else None)
+        else:
+            reason = self._change_mode(CopterMode.AUTO)
         return (FAILED, reason) if reason else (ACCEPTED, None)
 
     def reposition(self, lat_e7, lon_e7, alt_m, frame, speed_m_s, yaw_deg):

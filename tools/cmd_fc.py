@@ -5,10 +5,15 @@ from __future__ import annotations
 import json
 import sys
 
-from silbridge.shm import Segment
-
 from .flight import FlightOptions, close_fc_loop, make_fc_loop, mavlink_options
-from .flight_args import add_fc_arguments, add_mavlink_arguments, mavlink_wanted, parse_params
+from .flight_args import (
+    add_fc_arguments,
+    add_mavlink_arguments,
+    add_transport_arguments,
+    mavlink_wanted,
+    parse_params,
+)
+from .transport_wiring import fc_segment, guard_fc
 
 HELP = "the SIL FC program: attach to a running bridge and fly its vehicle"
 
@@ -18,6 +23,7 @@ def add_arguments(p) -> None:
                    help="shared-memory instance name of the bridge (default silbridge)")
     p.add_argument("--attach-timeout", type=float, default=10.0, metavar="S",
                    help="wait this long for the bridge's segment (default 10 s)")
+    add_transport_arguments(p, listen=False)
     add_fc_arguments(p)
     add_mavlink_arguments(p)
     p.add_argument("--log", default=None, metavar="FILE.mcap",
@@ -34,7 +40,8 @@ def run(args) -> int:
     out = (lambda s: print(s, file=sys.stderr)) if args.json else print
     from silbridge.shm import lockstep as ls
 
-    with Segment.attach(args.instance, timeout_s=args.attach_timeout) as seg:
+    with fc_segment(args.transport, args.instance, hil_addr=args.hil_addr,
+                    timeout_s=args.attach_timeout) as seg:
         # MAVLink by default when the bridge runs in real time (see add_mavlink_arguments)
         realtime = seg.word(ls.RUN_MODE) != ls.MODE_LOCKSTEP
         mav_opts = mavlink_options(FlightOptions(
@@ -43,6 +50,7 @@ def run(args) -> int:
             mission_file=args.mission_file))
         loop = make_fc_loop(seg, params=params, features_off=tuple(args.feature_off),
                             mavlink=mav_opts, out=out)
+        guard_fc(loop)
         sink = _open_log(args, loop)
         try:
             summary = run_fc(loop, out=out)

@@ -20,6 +20,15 @@ from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 from silbridge.shm import Segment
 
+from .transport_wiring import (
+    bridge_address,
+    bridge_segment,
+    fc_cli_args,
+    fc_segment,
+    guard_fc,
+    in_process_poll,
+)
+
 _NS = 1_000_000_000
 
 
@@ -41,6 +50,8 @@ class FlightOptions:
     no_default_gcs: bool = False        # leave out udpout 127.0.0.1:14550 and :14540
     param_file: str | None = None       # --params FILE (.parm)
     mission_file: str | None = None     # --mission FILE (QGC WPL 110)
+    transport: str = "shm"              # shm | udp | tcp (MAVLink HIL, tools/transport_wiring.py)
+    hil_addr: str | None = None         # udp/tcp: the bridge's listen address (default: any port)
 
 
 def default_instance() -> str:
@@ -125,7 +136,7 @@ def run_metadata(opts: FlightOptions, sc, sim, cfg, core) -> dict:
         "config": {
             "imu_hz": sim.imu_hz, "pwm_hz": cfg.pwm_hz, "physics_hz": _NS / sim.dt_ns,
             "baro_hz": sc.baro_hz, "mag_hz": sc.mag_hz, "gnss_hz": sc.gnss_hz,
-            "duration_s": cfg.duration_s, "seed": sc.seed, "transport": "shm",
+            "duration_s": cfg.duration_s, "seed": sc.seed, "transport": opts.transport,
             "processes": opts.processes,
             "mode": "lockstep" if opts.lockstep else f"realtime x{opts.speed:g}",
             "features_off": list(opts.features_off),
@@ -150,11 +161,13 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
     cfg = bridge_config(opts, sc)
     name = opts.instance or default_instance()
     sink = None
-    with Segment.create(name) as seg:
+    with bridge_segment(opts.transport, name, sim, hil_addr=opts.hil_addr, default_port=0) as seg:
         prepare_segment(seg, sim, cfg)
-        with Segment.attach(name) as fc_seg:
+        fc_addr = None if opts.transport == "shm" else bridge_address(seg)
+        with fc_segment(opts.transport, name, hil_addr=fc_addr, wait_config=False) as fc_seg:
             fc = make_fc_loop(fc_seg, params=opts.params, features_off=opts.features_off,
                               mavlink=mavlink_options(opts), out=out)
+            guard_fc(fc)
             if opts.log_path:
                 from .run_log import RunLogSink
                 sink = RunLogSink(opts.log_path,
@@ -162,8 +175,8 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
                 fc.sink = sink
                 fc.supervisor.sink = sink
             try:
-                res = run_bridge(sim, seg, cfg, fc_poll=fc.poll, sink=sink,
-                                 out=_tee(out, sink, sim))
+                res = run_bridge(sim, seg, cfg, sink=sink, out=_tee(out, sink, sim),
+                                 fc_poll=in_process_poll(fc, fc_seg, seg, sim, opts.lockstep))
             finally:
                 close_fc_loop(fc)
                 if sink is not None:
@@ -192,9 +205,10 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
     sc, sim = make_simulator(opts)
     cfg = bridge_config(opts, sc)
     name = opts.instance or default_instance()
-    with Segment.create(name) as seg:
+    with bridge_segment(opts.transport, name, sim, hil_addr=opts.hil_addr, default_port=0) as seg:
         prepare_segment(seg, sim, cfg)
         cmd = [sys.executable, "-m", "silbridge.tools", "fc", "--instance", name, "--json"]
+        cmd += fc_cli_args(opts.transport, seg)
         for pname, value in (opts.params or {}).items():
             cmd += ["--param", f"{pname}={value}"]
         for feature in opts.features_off:
@@ -263,6 +277,7 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         "processes": opts.processes,
         "checks": [{"name": c.name, "ok": c.ok, "detail": c.detail} for c in res.checks],
         "late_steps": res.late_steps,
+        **({"mavlink": fc_summary["mavlink"]} if "mavlink" in fc_summary else {}),
     }
 
 

@@ -30,11 +30,23 @@ def add_flight_arguments(p: argparse.ArgumentParser, *, processes: bool) -> None
     p.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
     p.add_argument("--instance", default=None,
                    help="shared-memory instance name (several runs can coexist)")
+    add_transport_arguments(p, listen=True)
     add_fc_arguments(p)
     if processes:
         p.add_argument("--log", default=None, metavar="FILE.mcap",
                        help="write the run's MCAP log (open it in Foxglove; `silbridge analyze`)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def add_transport_arguments(p: argparse.ArgumentParser, *, listen: bool) -> None:
+    """--transport shm|udp|tcp and --hil-addr (docs/hil_transport.md)."""
+    p.add_argument("--transport", choices=("shm", "udp", "tcp"), default="shm",
+                   help="bridge <-> FC link: shared memory (default) or MAVLink 2 HIL messages "
+                        "over UDP or TCP (PX4 convention: the simulator listens)")
+    where = ("listen on HOST:PORT (bridge default 127.0.0.1:4560; `fly` picks a free port)"
+             if listen else "the simulator's HOST:PORT (default 127.0.0.1:4560)")
+    p.add_argument("--hil-addr", default=None, metavar="HOST:PORT",
+                   help=f"udp/tcp only: {where}")
 
 
 def add_fc_arguments(p: argparse.ArgumentParser) -> None:
@@ -100,5 +112,6 @@ def options_from_args(args) -> FlightOptions:
         speed=args.speed if args.speed is not None else 1.0,
         processes=getattr(args, "processes", 2), imu_hz=args.imu_hz, seed=args.seed,
         instance=args.instance, params=parse_params(args.param),
+        transport=getattr(args, "transport", "shm"), hil_addr=getattr(args, "hil_addr", None),
         log_path=getattr(args, "log", None),
         features_off=tuple(args.feature_off), **mav_extra)

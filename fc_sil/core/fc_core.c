@@ -16,6 +16,9 @@ _Static_assert(sizeof(fc_core_status_t) == 248, "fc_core_status_t layout is mirr
 /* dt limits for one IMU step: a longer gap (a paused simulation) is integrated
  * as 50 ms so the filters and integrators see a bounded step. */
 #define FC_MAX_IMU_DT_S 0.05f
+#define FC_MAX_IMU_DT_NS 50000000LL
+/* GNSS-aided tilt needs a 3D fix (MAVLink GPS_FIX_TYPE_3D_FIX and better). */
+#define FC_GNSS_AID_MIN_FIX 3
 /* Filters are recomputed when the measured period moves by more than 1 %. */
 #define FC_RETUNE_TOLERANCE 0.01f
 /* Estimator gains while disarmed (on the ground, still): a critically damped
@@ -50,6 +53,8 @@ static void derive_configs(fc_core_t *c)
     c->ahrs_cfg.still_acc_g = p->sb_still_acc;
     c->ahrs_cfg.trust_ema_enable = p->sb_trust_ema_en != 0;
     c->ahrs_cfg.bias_enable = p->sb_bias_en != 0;
+    c->ahrs_cfg.kp_gnss = p->sb_ahrs_gps_kp;
+    c->ahrs_cfg.ki_gnss = p->sb_ahrs_gps_ki;
     c->ahrs_ground_cfg = c->ahrs_cfg;
     c->ahrs_ground_cfg.kp = fmaxf(p->sb_ahrs_kp, FC_AHRS_GROUND_KP);
     c->ahrs_ground_cfg.ki = fmaxf(p->sb_ahrs_ki, FC_AHRS_GROUND_KI);
@@ -210,6 +215,8 @@ void fc_core_reset(fc_core_t *c)
     fc_blend_reset(&c->blend, 0.0f);
     fc_alt_est_reset(&c->alt_est);
     fc_alt_ctrl_init(&c->alt_ctrl, &c->alt_cfg, pwm_period_s(c));
+    fc_gnss_aid_reset(&c->gnss_aid);
+    c->gnss_aid_count = 0;
     reset_controllers(c, true);
 
     c->have_imu = false;
@@ -414,6 +421,10 @@ fc_status_t fc_core_imu_step(fc_core_t *c, int64_t sim_ns, const float accel_frd
         return FC_ERR_ARG;
     }
     const float dt_s = fminf((float)(sim_ns - c->last_imu_ns) * 1e-9f, FC_MAX_IMU_DT_S);
+    /* The interval this sample stands for, as integrated (a longer gap is cut). */
+    const int64_t t0_ns = (sim_ns - c->last_imu_ns > FC_MAX_IMU_DT_NS)
+                              ? sim_ns - FC_MAX_IMU_DT_NS
+                              : c->last_imu_ns;
     c->last_imu_ns = sim_ns;
     c->imu_count++;
 
@@ -427,6 +438,12 @@ fc_status_t fc_core_imu_step(fc_core_t *c, int64_t sim_ns, const float accel_frd
         c->ahrs_ground = ground;
         fc_mahony_configure(&c->ahrs, ground ? &c->ahrs_ground_cfg : &c->ahrs_cfg);
     }
+    if (ground) {
+        fc_mahony_gnss_forget(&c->ahrs); /* on the ground the still accelerometer aligns */
+    }
+    /* The raw accelerometer: its vibration integrates out, while the front-end
+     * filter's delay would skew the interval against the GNSS epochs. */
+    fc_gnss_aid_add_imu(&c->gnss_aid, t0_ns, sim_ns, c->ahrs.q_wxyz, accel_frd_m_s2);
     (void)fc_mahony_update(&c->ahrs, gyro_frd_rad_s, c->ins.accel_frd_m_s2, dt_s);
     fc_alt_est_predict(&c->alt_est, c->ahrs.q_wxyz, c->ins.accel_frd_m_s2, dt_s,
                        c->in.armed == 0);
@@ -500,6 +517,29 @@ fc_status_t fc_core_gt_nav_step(fc_core_t *c, int64_t sim_ns, const float pos_ne
     return FC_OK;
 }
 
+/* Compare the fix with the IMU history over the interval since the previous
+ * fix's epoch (both GPS_DELAY_MS before arrival) and hand the result to the
+ * estimator, in flight configuration only: disarmed, the still accelerometer
+ * aligns faster with the ground gains. */
+static void gnss_aid_tilt(fc_core_t *c, const fc_gnss_store_t *fix)
+{
+    const fc_params_t *p = &c->params;
+    if (p->sb_ahrs_gps == 0 || fix->fix_type < FC_GNSS_AID_MIN_FIX) {
+        fc_gnss_aid_forget_fix(&c->gnss_aid);
+        fc_mahony_gnss_forget(&c->ahrs);
+        return;
+    }
+    const int64_t epoch_ns = fix->sim_ns - (int64_t)p->gps_delay_ms * 1000000LL;
+    float f_imu_ned[3], f_gnss_ned[3];
+    if (fc_gnss_aid_fix(&c->gnss_aid, epoch_ns, fix->vel_ned_m_s, f_imu_ned, f_gnss_ned) != FC_OK
+        || c->in.armed == 0) {
+        return;
+    }
+    if (fc_mahony_gnss(&c->ahrs, f_imu_ned, f_gnss_ned) == FC_OK) {
+        c->gnss_aid_count++;
+    }
+}
+
 fc_status_t fc_core_gnss_step(fc_core_t *c, const fc_gnss_store_t *fix)
 {
     if (!fc_finite3(fix->vel_ned_m_s)) {
@@ -508,6 +548,7 @@ fc_status_t fc_core_gnss_step(fc_core_t *c, const fc_gnss_store_t *fix)
     }
     c->gnss = *fix;
     c->gnss.valid = true;
+    gnss_aid_tilt(c, fix);
     return FC_OK;
 }
 

@@ -10,7 +10,10 @@
  *                detection) -> altitude controller -> mixer, clamp, slew ->
  *                PWM, and a status snapshot.
  *   BARO / MAG / GT / GNSS: routed to the vertical estimator, the heading
- *                corrector, the blend inputs and a store.
+ *                corrector, the blend inputs and a store; while armed, each
+ *                GNSS fix is also compared with the IMU history over its
+ *                delayed interval (fc_gnss_aid.h) and the result corrects the
+ *                estimator's tilt (SB_AHRS_GPS).
  *
  * PWM ticks lie on a grid of 1/SB_PWM_HZ in simulation time. fc_core_pwm_due
  * tells the host when a tick is due: every tick whose time is <= the latest
@@ -18,7 +21,8 @@
  *
  * Inputs (targets) are set between steps with the fc_core_set_* functions;
  * they validate (non-finite refused) and take effect on the next step.
- * No heap, no globals: everything lives in fc_core_t (about 2 kB).
+ * No heap, no globals: everything lives in fc_core_t (about 4 kB, 1.5 kB of
+ * it the GNSS-aiding history).
  */
 #ifndef FC_CORE_H
 #define FC_CORE_H
@@ -30,6 +34,7 @@
 #include "fc_alt_est.h"
 #include "fc_attitude.h"
 #include "fc_blend.h"
+#include "fc_gnss_aid.h"
 #include "fc_ins.h"
 #include "fc_mahony.h"
 #include "fc_mixer.h"
@@ -124,6 +129,8 @@ typedef struct fc_core {
     fc_mixer_t mixer;
     fc_alt_est_t alt_est;
     fc_alt_ctrl_t alt_ctrl;
+    fc_gnss_aid_t gnss_aid;   /* IMU history for the GNSS-aided tilt correction */
+    uint32_t gnss_aid_count;  /* GNSS fixes that corrected the tilt so far */
 
     bool ahrs_ground;     /* ahrs runs the ground configuration */
 

@@ -19,6 +19,11 @@
  * bias holds the tilt only 0.2 rad off at kp = 0.5): the integrator waits, or
  * it would learn a fake bias during the initial convergence and overshoot. */
 #define FC_MAHONY_I_GATE_RAD 0.2f
+/* A GNSS-aided error older than this is dropped (fixes come at 5 to 10 Hz;
+ * two missed fixes mean the aiding is gone and the accelerometer takes over). */
+#define FC_MAHONY_GNSS_STALE_S 0.5f
+/* Specific forces below this carry no usable direction (near free fall). */
+#define FC_MAHONY_GNSS_MIN_F_M_S2 (0.3f * FC_GRAVITY_M_S2)
 
 void fc_mahony_configure(fc_mahony_t *m, const fc_mahony_config_t *cfg)
 {
@@ -35,6 +40,7 @@ void fc_mahony_set_attitude(fc_mahony_t *m, const float q_wxyz[4])
         m->bias_rad_s[i] = 0.0f;
         m->integ_rad_s[i] = 0.0f;
     }
+    fc_mahony_gnss_forget(m); /* a held GNSS error refers to the old attitude */
     m->aligned = true;
 }
 
@@ -56,6 +62,7 @@ void fc_mahony_init(fc_mahony_t *m, const fc_mahony_config_t *cfg)
     }
     m->accel_ref_age_s = 0.0f;
     m->accel_ref_valid = false;
+    fc_mahony_gnss_forget(m);
 }
 
 fc_status_t fc_mahony_align(fc_mahony_t *m, const float accel_frd_m_s2[3])
@@ -159,14 +166,23 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
         m->trust = m->trust_raw;
     }
 
-    /* (3) PI correction: tilt weighted by trust, plus the magnetometer heading. */
+    /* (3) PI correction: tilt weighted by trust (or the GNSS-aided tilt while
+     * fresh), plus the magnetometer heading. */
+    float kp = cfg->kp, ki = cfg->ki, w = m->trust;
+    if (fc_mahony_gnss_active(m)) {
+        fc_quat_rotate_inv(q, m->gnss_err_ned_rad, e);
+        kp = cfg->kp_gnss;
+        ki = cfg->ki_gnss;
+        w = 1.0f; /* already free of the vehicle's acceleration: no trust weighting */
+    }
+    m->gnss_age_s += dt_s;
     const bool learn = fc_norm3(e) < FC_MAHONY_I_GATE_RAD;
     float corr[3];
     for (int i = 0; i < 3; i++) {
-        const float ew = m->trust * e[i];
-        corr[i] = cfg->kp * ew;
+        const float ew = w * e[i];
+        corr[i] = kp * ew;
         if (learn) {
-            m->integ_rad_s[i] += cfg->ki * ew * dt_s;
+            m->integ_rad_s[i] += ki * ew * dt_s;
         }
     }
     if (m->heading_valid && m->heading_age_s < FC_MAHONY_HEADING_STALE_S) {
@@ -250,5 +266,48 @@ fc_status_t fc_mahony_set_accel_ref(fc_mahony_t *m, const float accel_ned_m_s2[3
     }
     m->accel_ref_age_s = 0.0f;
     m->accel_ref_valid = true;
+    return FC_OK;
+}
+
+void fc_mahony_gnss_forget(fc_mahony_t *m)
+{
+    for (int i = 0; i < 3; i++) {
+        m->gnss_err_ned_rad[i] = 0.0f;
+    }
+    m->gnss_age_s = 0.0f;
+    m->gnss_valid = false;
+}
+
+bool fc_mahony_gnss_active(const fc_mahony_t *m)
+{
+    return m->gnss_valid && m->gnss_age_s < FC_MAHONY_GNSS_STALE_S;
+}
+
+fc_status_t fc_mahony_gnss(fc_mahony_t *m, const float f_imu_ned_m_s2[3],
+                           const float f_gnss_ned_m_s2[3])
+{
+    if (!fc_finite3(f_imu_ned_m_s2) || !fc_finite3(f_gnss_ned_m_s2)) {
+        return FC_ERR_NONFINITE;
+    }
+    const float n_imu = fc_norm3(f_imu_ned_m_s2);
+    const float n_gnss = fc_norm3(f_gnss_ned_m_s2);
+    if (n_imu < FC_MAHONY_GNSS_MIN_F_M_S2 || n_gnss < FC_MAHONY_GNSS_MIN_F_M_S2) {
+        return FC_ERR_ARG;
+    }
+    float a[3], b[3];
+    for (int i = 0; i < 3; i++) {
+        a[i] = f_imu_ned_m_s2[i] / n_imu;
+        b[i] = f_gnss_ned_m_s2[i] / n_gnss;
+    }
+    if (a[0] * b[0] + a[1] * b[1] + a[2] * b[2] <= 0.0f) {
+        return FC_ERR_ARG; /* more than 90 degrees apart: a glitch, not a tilt */
+    }
+    /* Same convention as the accelerometer path (measured x expected, there in
+     * body axes): R (a x b) = (R a) x (R b), so this is that error in NED. The
+     * down component is a heading error; the magnetometer owns the heading. */
+    fc_cross3(a, b, m->gnss_err_ned_rad);
+    m->gnss_err_ned_rad[2] = 0.0f;
+    m->gnss_age_s = 0.0f;
+    m->gnss_valid = true;
     return FC_OK;
 }

@@ -33,6 +33,16 @@
  * expected specific force then becomes a_ref - g and the trust compares |a|
  * with its magnitude. It expires FC_MAHONY_ACCEL_REF_STALE_S after the last set.
  *
+ * GNSS-aided tilt (fc_mahony_gnss; fc_gnss_aid.h computes its inputs): the
+ * mean specific force over a past fix interval, measured (IMU rotated by the
+ * estimate) and implied by GNSS velocity, both NED. Their cross product is
+ * the estimate's tilt error at that time, free of the vehicle's acceleration
+ * and of the GNSS latency. Its horizontal part (the vertical one is heading,
+ * which the magnetometer owns) is held until the next fix and, while fresh,
+ * replaces the accelerometer tilt error: P gain kp_gnss, I gain ki_gnss. The
+ * integrator then learns a gyro bias in flight, where the accelerometer alone
+ * cannot tell a bias-driven tilt from the thrust axis.
+ *
  * Heading (paper 3.4: MAG goes to the yaw/heading corrector): each
  * magnetometer sample gives the heading error of the estimate (field rotated
  * to NED, its horizontal direction against magnetic north + declination); it
@@ -57,6 +67,8 @@ typedef struct fc_mahony_config {
     float bias_rate_hz;     /* integrator -> bias transfer rate while quasi-static [1/s] */
     float still_gyro_rad_s; /* quasi-static: |gyro - bias| below this [rad/s] */
     float still_acc_g;      /* quasi-static: | |a|/g - 1 | below this [g] */
+    float kp_gnss;          /* GNSS-aided tilt correction P [1/s] */
+    float ki_gnss;          /* GNSS-aided tilt correction I [1/s^2] */
     bool trust_ema_enable;  /* false: trust = trust_raw (ablation) */
     bool bias_enable;       /* false: no explicit bias estimate */
 } fc_mahony_config_t;
@@ -71,6 +83,9 @@ typedef struct fc_mahony {
     float accel_ref_ned_m_s2[3]; /* kinematic acceleration reference, NED [m/s^2] */
     float accel_ref_age_s;    /* time since it was set [s] */
     bool accel_ref_valid;
+    float gnss_err_ned_rad[3]; /* latest GNSS-aided tilt error, NED (down part 0) */
+    float gnss_age_s;         /* time since it was measured [s] */
+    bool gnss_valid;          /* a GNSS-aided error is held */
     float heading_err_rad;    /* latest magnetometer heading error (estimate - mag) */
     float heading_age_s;      /* time since that error was measured [s] */
     bool heading_valid;       /* a magnetometer sample has been used */
@@ -89,5 +104,15 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
 fc_status_t fc_mahony_mag(fc_mahony_t *m, const float field_frd[3], float declination_rad);
 /* Kinematic acceleration of the vehicle, NED [m/s^2] (not the specific force). */
 fc_status_t fc_mahony_set_accel_ref(fc_mahony_t *m, const float accel_ned_m_s2[3]);
+/* Mean specific force over one past interval, measured by the IMU (rotated by
+ * the estimate) and implied by GNSS velocity, NED [m/s^2]. FC_ERR_ARG (and
+ * nothing held) when either is too small to give a direction or they point
+ * more than 90 degrees apart. */
+fc_status_t fc_mahony_gnss(fc_mahony_t *m, const float f_imu_ned_m_s2[3],
+                           const float f_gnss_ned_m_s2[3]);
+/* Drop the held GNSS-aided error (aiding off, fix lost): back to the accelerometer. */
+void fc_mahony_gnss_forget(fc_mahony_t *m);
+/* True while a GNSS-aided error is fresh and replaces the accelerometer's. */
+bool fc_mahony_gnss_active(const fc_mahony_t *m);
 
 #endif /* FC_MAHONY_H */

@@ -223,9 +223,11 @@ static PyObject *ins_run(PyObject *m, PyObject *args)
 static int parse_mahony_cfg(PyObject *t, fc_mahony_config_t *cfg)
 {
     int ema, bias;
-    if (!PyArg_ParseTuple(t, "ffffffffpp", &cfg->kp, &cfg->ki, &cfg->kmag, &cfg->trust_tc_s,
+    cfg->kp_gnss = 0.0f; /* optional: the GNSS-aided gains */
+    cfg->ki_gnss = 0.0f;
+    if (!PyArg_ParseTuple(t, "ffffffffpp|ff", &cfg->kp, &cfg->ki, &cfg->kmag, &cfg->trust_tc_s,
                           &cfg->trust_span_g, &cfg->bias_rate_hz, &cfg->still_gyro_rad_s,
-                          &cfg->still_acc_g, &ema, &bias)) {
+                          &cfg->still_acc_g, &ema, &bias, &cfg->kp_gnss, &cfg->ki_gnss)) {
         return 0;
     }
     cfg->trust_ema_enable = ema != 0;
@@ -342,6 +344,21 @@ static PyObject *mahony_accel_ref(PyObject *m, PyObject *args)
     return r;
 }
 
+static PyObject *mahony_gnss(PyObject *m, PyObject *args)
+{
+    (void)m;
+    Py_buffer b;
+    float fi[3], fg[3];
+    if (!PyArg_ParseTuple(args, "w*(fff)(fff)", &b, &fi[0], &fi[1], &fi[2], &fg[0], &fg[1],
+                          &fg[2])) {
+        return NULL;
+    }
+    fc_mahony_t *mh = fc_ext_state(&b, sizeof *mh, "mahony");
+    PyObject *r = mh ? PyLong_FromLong(fc_mahony_gnss(mh, fi, fg)) : NULL;
+    PyBuffer_Release(&b);
+    return r;
+}
+
 static PyObject *mahony_state(PyObject *m, PyObject *args)
 {
     (void)m;
@@ -352,14 +369,15 @@ static PyObject *mahony_state(PyObject *m, PyObject *args)
     fc_mahony_t *mh = fc_ext_state(&b, sizeof *mh, "mahony");
     PyObject *r = NULL;
     if (mh) {
-        r = Py_BuildValue("{s:(dddd),s:(ddd),s:(ddd),s:d,s:d,s:O,s:O}", "q_wxyz",
+        r = Py_BuildValue("{s:(dddd),s:(ddd),s:(ddd),s:d,s:d,s:O,s:O,s:O}", "q_wxyz",
                           (double)mh->q_wxyz[0], (double)mh->q_wxyz[1], (double)mh->q_wxyz[2],
                           (double)mh->q_wxyz[3], "bias_rad_s", (double)mh->bias_rad_s[0],
                           (double)mh->bias_rad_s[1], (double)mh->bias_rad_s[2], "integ_rad_s",
                           (double)mh->integ_rad_s[0], (double)mh->integ_rad_s[1],
                           (double)mh->integ_rad_s[2], "trust", (double)mh->trust, "trust_raw",
                           (double)mh->trust_raw, "still", mh->still ? Py_True : Py_False,
-                          "heading_valid", mh->heading_valid ? Py_True : Py_False);
+                          "heading_valid", mh->heading_valid ? Py_True : Py_False,
+                          "gnss_active", fc_mahony_gnss_active(mh) ? Py_True : Py_False);
     }
     PyBuffer_Release(&b);
     return r;
@@ -707,6 +725,7 @@ PyMethodDef fc_ext_block_methods[] = {
     {"mahony_run", mahony_run, METH_VARARGS, "mahony_run(buf, gyro, accel, dt) -> (q, bias, trust)"},
     {"mahony_mag", mahony_mag, METH_VARARGS, "mahony_mag(buf, field3, declination)"},
     {"mahony_accel_ref", mahony_accel_ref, METH_VARARGS, "mahony_accel_ref(buf, a_ned3)"},
+    {"mahony_gnss", mahony_gnss, METH_VARARGS, "mahony_gnss(buf, f_imu_ned3, f_gnss_ned3)"},
     {"mahony_state", mahony_state, METH_VARARGS, "mahony_state(buf) -> dict"},
     {"attitude_error", attitude_error, METH_VARARGS, "attitude_error(q, roll, pitch, yaw, hold)"},
     {"attitude_rate_targets", attitude_rate_targets, METH_VARARGS,

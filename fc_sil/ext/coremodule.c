@@ -337,14 +337,17 @@ static PyObject *Core_counters(CoreObject *self, PyObject *noargs)
 {
     (void)noargs;
     const fc_core_t *c = &self->core;
-    return Py_BuildValue("{s:K,s:K,s:K,s:K,s:K,s:K,s:K,s:L}", "imu", (unsigned long long)c->imu_count,
+    return Py_BuildValue("{s:K,s:K,s:K,s:K,s:K,s:K,s:K,s:L,s:K,s:O}", "imu",
+                         (unsigned long long)c->imu_count,
                          "rate_loop", (unsigned long long)c->loop_count, "pwm",
                          (unsigned long long)c->pwm_count, "rejected",
                          (unsigned long long)c->rejected_count, "records",
                          (unsigned long long)self->records_in, "unknown_kind",
                          (unsigned long long)self->unknown_kind, "ins_rejected",
                          (unsigned long long)c->ins.rejected, "last_imu_ns",
-                         (long long)c->last_imu_ns);
+                         (long long)c->last_imu_ns, "gnss_aid",
+                         (unsigned long long)c->gnss_aid_count, "gnss_aid_active",
+                         fc_mahony_gnss_active(&c->ahrs) ? Py_True : Py_False);
 }
 
 static PyObject *Core_gnss(CoreObject *self, PyObject *noargs)
