@@ -192,7 +192,7 @@ SETPOINT_TYPES = {
         "shape": F("str", "step", choices=("step", "ramp")),
         "ramp_s": F("float", 0.5, above=0, drawable=True, unit="s", text="for shape = ramp"),
         "hold_s": F("float", 2.0, above=0, drawable=True, unit="s"),
-        "doublet": F("bool", True, text="+A, then -A, then level: keeps the vehicle near home"),
+        "doublet": F("bool", True, text="+A, level, -A, level: each step is A, and the vehicle stays near home"),
         "repeat": F("int", 1, min=1),
         "period_s": F("float", 0.0, min=0, unit="s", text="between repetitions (repeat > 1)"),
     },

@@ -2,7 +2,7 @@
 
 The profile: at step 1 the take-off altitude with level attitude and the home
 heading; then [[setpoint]] entries change it:
-- tilt: roll or pitch doublets (+A, -A, level) or single pulses (+A, level),
+- tilt: roll or pitch doublets (+A, level, -A, level) or single pulses (+A, level),
   as steps or linear ramps of ramp_s; `repeat` times every `period_s`, each
   repetition with its own drawn amplitude and hold. Tilts on the same axis add.
 - altitude / yaw: go to a new value at start_s, stepped or ramped over ramp_s.
@@ -59,7 +59,9 @@ def _tilt_curve(sp, r: int) -> list[tuple[float, float]]:
     a = sp.amplitude_deg[r]
     hold = sp.hold_s[r]
     ramp = sp.ramp_s[r] if sp.shape == "ramp" else 0.0
-    levels = [a, -a, 0.0] if sp.doublet else [a, 0.0]
+    # A doublet passes through level between +A and -A: every step or ramp is then
+    # A (20 to 35 deg in S4, the paper's range), never the 2A of a direct +A -> -A.
+    levels = [a, 0.0, -a, 0.0] if sp.doublet else [a, 0.0]
     knots = [(t0, 0.0)]
     t, v = t0, 0.0
     for i, target in enumerate(levels):

@@ -24,7 +24,7 @@ ESTIMATOR_SETTLE_S = 1.0
 TRUST_CONVERGED = 0.5
 
 
-def prearm_failure(v, *, arming: bool = True) -> str | None:
+def prearm_failure(v) -> str | None:
     """None when every check passes, else the STATUSTEXT of the first failure."""
     to_ns = int(v.cfg.sens_timeout_s * 1e9)
     seen = v.last_seen_ns

@@ -14,10 +14,12 @@ and leaves with a clear message when the bridge dies.
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
 
+from silbridge.shm import Ring
 from silbridge.shm import lockstep as ls
 from silbridge.shm.records import FLAG_STEP_END, RECORD_DTYPE
 
@@ -148,7 +150,10 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print) -> dict:
     """
     seg = loop.seg
     dt_ns = seg.word(ls.PHYSICS_DT_NS) or 1_000_000
-    yield_s = max(2e-4, 2.0 * dt_ns / _NS)
+    wait = seg.sensors.wait
+    if isinstance(seg.sensors, Ring):   # the shm ring's wait can yield longer; HIL links block
+        yield_s = max(2e-4, 2.0 * dt_ns / _NS)
+        wait = functools.partial(wait, yield_s=yield_s)
     seg.set_word(ls.FC_STATE, ls.FC_STATE_READY)
     try:
         while True:
@@ -162,7 +167,7 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print) -> dict:
                 break
             # Yield (not sleep) through about a physics period: a sleeping FC wakes
             # up to ~1 ms after its data, a yielding one within a microsecond or two.
-            if not seg.sensors.wait(wait_slice_s, yield_s=yield_s):
+            if not wait(wait_slice_s):
                 seg.beat()
                 if seg.word(ls.STOP):
                     continue

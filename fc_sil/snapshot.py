@@ -19,7 +19,8 @@ import math
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.vehicle_api import PidTuningRow, SensorBit, VehicleSnapshot
+from silbridge.mavlink.vehicle_api import (CopterMode, NavControllerOutput, PidTuningRow, SensorBit,
+                                           VehicleSnapshot)
 from silbridge.shm.records import Kind
 
 from .prearm import prearm_failure
@@ -63,7 +64,7 @@ def _sensor_bits(v) -> tuple[int, int, int]:
         health &= ~SensorBit.BATTERY
     if v.imu_run_s < 1.0 or v.trust < 0.5:
         health &= ~SensorBit.AHRS
-    if not v.armed and prearm_failure(v, arming=False) is not None:
+    if not v.armed and prearm_failure(v) is not None:
         health &= ~SensorBit.PREARM_CHECK
     return present, enabled, health
 
@@ -156,13 +157,12 @@ def build_snapshot(v) -> VehicleSnapshot:
         throttle_pct=thr_pct, climb_m_s=v.climb_m_s,
         nav=_nav_output(v, nav_bearing), pid_rows=pid_rows,
         mission_seq=v.mission.current, mission_state=v.mission.state,
-        mission_mode=1 if v.mode.number == 3 else 0,
+        mission_mode=1 if v.mode.number == CopterMode.AUTO else 0,
         vibration_m_s2=tuple(math.sqrt(max(0.0, x)) for x in v.vibe),
         flight_custom_version=v.custom_version, **gps)
 
 
 def _nav_output(v, bearing_deg: int):
-    from silbridge.mavlink.vehicle_api import NavControllerOutput
     d = v.wp.distance_to_dest(v.est.pos_ne_m) if v.wp.active else 0.0
     return NavControllerOutput(
         nav_roll_deg=math.degrees(v.cmd_roll), nav_pitch_deg=math.degrees(v.cmd_pitch),

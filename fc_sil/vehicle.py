@@ -17,6 +17,10 @@ time and at ``--speed X``. One step:
 Under MAVLink control the vehicle starts disarmed in STABILIZE on the ground and obeys the
 GCS only: the core is told to skip the scenario's SETPOINT records.
 
+The class is split by concept: this file holds the loop and the state; vehicle_nav.py the
+navigation outputs the modes use (NavHelpers), vehicle_commands.py the GCS requests
+(GcsCommands); both are mixins of Vehicle.
+
 Altitudes are metres up above home (the C core's altitude is relative to the arming point,
 which is home); horizontal positions are metres NE about the estimator origin (first fix).
 """
@@ -38,26 +42,21 @@ from .failsafe import FailsafeMonitor
 from .mission_exec import MissionExecutor
 from .nav_config import NavConfig
 from .nav_pos import PosController
-from .nav_wp import WaypointNav, WpSpeeds
+from .nav_wp import WaypointNav
 from .param_store import CoreParamStore
 from .pilot import PilotInput
 from .pos_est import PositionEstimator
-from .prearm import prearm_failure
 from .snapshot import build_snapshot
+from .vehicle_commands import GcsCommands
+from .vehicle_nav import NavHelpers
 
 log = logging.getLogger(__name__)
 _NS = 1_000_000_000
-ACCEPTED, FAILED, DENIED = mav.MAV_RESULT_ACCEPTED, mav.MAV_RESULT_FAILED, mav.MAV_RESULT_DENIED
-TYPE_MASK_POS = 0x7
-TYPE_MASK_VEL = 0x38
-TYPE_MASK_YAW = 0x400
-TYPE_MASK_YAW_RATE = 0x800
-ATT_MASK_ATTITUDE = 0x80
 # home altitude: GNSS altitude averaged while disarmed (one fix is +-3 m; this EMA settles it)
 HOME_ALT_TC_S = 5.0
 
 
-class Vehicle:
+class Vehicle(NavHelpers, GcsCommands):
     """FcLoop supervisor and VehicleCommands implementation; see module text."""
 
     def __init__(self, core, store: CoreParamStore | None = None, *, nav_hz: float = 50.0,
@@ -121,6 +120,7 @@ class Vehicle:
         self.guided_att = None
         self.mode: M.Mode = M.Stabilize()
         self.setpoints_ignored = 0
+        self._rc_fs = False               # radio failsafe latched
         self.custom_version = _git_hash()
         self._load_window = (time.monotonic_ns(), 0, 0)    # (wall start, step ns, permille)
 
@@ -159,7 +159,6 @@ class Vehicle:
         self.failsafe.check(self)
         self._radio_failsafe()
         self.landing = False
-        self.yaw_rate_cmd = None if self.yaw_rate_cmd is None else self.yaw_rate_cmd
         if self.armed:
             self.mode.run(self, dt_s)
             self._apply_attitude()
@@ -258,151 +257,6 @@ class Vehicle:
             return None
         s = self.server.seconds_since_gcs_heartbeat()
         return None if s == float("inf") else s
-
-    # ============================================================================================
-    # helpers the modes use
-
-    def _wp_speeds(self, speed_m_s: float | None) -> WpSpeeds:
-        sp = self.cfg.wp
-        if speed_m_s:
-            return WpSpeeds(speed_m_s, sp.up_m_s, sp.dn_m_s, sp.accel_m_s2, sp.radius_m)
-        return sp
-
-    def reset_vertical(self) -> None:
-        self.alt_target_m = self.alt_m if self.airborne else min(self.alt_m, 0.0)
-        self.alt_hold_m = self.alt_m if self.airborne else 0.0
-
-    def reset_horizontal(self) -> None:
-        self.pos_ctl.reset(self.est.vel_ne_m_s)
-
-    def command_attitude(self, roll_rad: float, pitch_rad: float) -> None:
-        self.cmd_roll, self.cmd_pitch = roll_rad, pitch_rad
-
-    def command_throttle(self, throttle: float) -> None:
-        self.core.set_throttle(min(1.0, max(0.0, throttle)))
-        self.alt_target_m = self.alt_hold_m = self.alt_m
-
-    def command_vertical(self, dt_s: float, goal_m: float) -> None:
-        """Hold/approach an altitude, moving the target at WPNAV_SPEED_UP/_DN."""
-        sp = self.cfg.wp
-        if not self.airborne and goal_m <= 0.0:
-            self.alt_target_m = goal_m
-        else:
-            err = goal_m - self.alt_target_m
-            self.alt_target_m += max(-sp.dn_m_s * dt_s, min(sp.up_m_s * dt_s, err))
-        self.core.set_altitude_target(self.alt_target_m)
-
-    def command_climb(self, dt_s: float, climb_m_s: float) -> None:
-        self.core.set_climb_rate(climb_m_s)
-        self.alt_target_m = self.alt_hold_m = self.alt_m
-
-    def land_descent(self, dt_s: float) -> bool:
-        """LAND's vertical channel; True once touched down (the core's land detector)."""
-        self.landing = True
-        if self.armed and not self.airborne and self.spool != 2:
-            return True
-        fast = self.alt_m > self.cfg.land_alt_low_m
-        speed = self.cfg.wp.dn_m_s if fast else self.cfg.land_speed_m_s
-        self.core.set_climb_rate(-speed)
-        self.alt_target_m = self.alt_hold_m = 0.0
-        return False
-
-    def hold_position(self, dt_s: float, target_ne, vel_ne, speed_m_s: float) -> None:
-        if not self.airborne or not self.position_ok():
-            self.pos_ctl.reset(self.est.vel_ne_m_s if self.airborne else (0.0, 0.0))
-            self.command_attitude(0.0, 0.0)
-            return
-        roll, pitch = self.pos_ctl.update(dt_s, self.est.pos_ne_m, self.est.vel_ne_m_s,
-                                          target_pos=target_ne, target_vel=vel_ne,
-                                          speed_max_m_s=speed_m_s, yaw_rad=self.yaw_rad)
-        self.command_attitude(roll, pitch)
-
-    def start_track(self, dest_ne, alt_m: float, speed_m_s: float | None) -> None:
-        self.wp.sp = self._wp_speeds(speed_m_s or self.speed_override_m_s)
-        start_alt = self.alt_target_m if self.airborne else self.alt_m
-        speed = math.hypot(*self.est.vel_ne_m_s) if self.airborne else 0.0
-        self.wp.set_destination(self.est.pos_ne_m, start_alt, dest_ne, alt_m, speed)
-
-    def fly_track(self, dt_s: float) -> bool:
-        """Follow the active track; True when its destination is reached."""
-        tp, tv, talt = self.wp.update(dt_s, self.est.pos_ne_m, self.alt_m)
-        self.hold_position(dt_s, tp, tv, self.wp.sp.speed_m_s * 1.2)
-        self.alt_target_m = talt
-        self.alt_hold_m = self.wp.dest[2]
-        self.core.set_altitude_target(talt)
-        if not self.airborne and talt > 0.0:
-            self.takeoff_in_progress = True
-        return self.wp.reached(self.est.pos_ne_m, self.alt_m)
-
-    def track_dest_ne(self):
-        return self.wp.dest[0], self.wp.dest[1]
-
-    def face_track(self, rtl: bool) -> None:
-        b = self.wp.bearing_rad
-        behave = self.cfg.wp_yaw_behavior
-        if b is None or behave == 0 or (behave == 2 and rtl):
-            return
-        self.yaw_target_rad = b
-
-    def hold_heading(self) -> None:
-        self.yaw_rate_cmd = None
-
-    # ---- pilot ----------------------------------------------------------------------------
-
-    def _pilot_fresh(self) -> bool:
-        return self.pilot.fresh(self.cfg.rc_fs_timeout_s)
-
-    def pilot_sticks_rpy(self) -> tuple[float, float, float]:
-        if not self._pilot_fresh():
-            return 0.0, 0.0, 0.0
-        return self.pilot.roll, self.pilot.pitch, self.pilot.yaw
-
-    def pilot_throttle_stick(self) -> float:
-        """0..1; 0 without fresh pilot input (throttle down)."""
-        return self.pilot.throttle if self._pilot_fresh() else 0.0
-
-    def pilot_attitude(self) -> None:
-        r, p, y = self.pilot_sticks_rpy()
-        a = self.cfg.angle_max_rad
-        self.command_attitude(r * a, p * a)
-        self.pilot_yaw(y)
-
-    def pilot_yaw(self, yaw_in: float) -> None:
-        if abs(yaw_in) > 0.05:
-            self.yaw_rate_cmd = yaw_in * self.cfg.pilot_y_rate_rad_s
-            self.yaw_target_rad = self.yaw_rad
-        else:
-            self.yaw_rate_cmd = None
-
-    def pilot_throttle(self) -> float:
-        """STABILIZE: stick centre = hover throttle (ArduCopter's throttle curve)."""
-        z = self.pilot_throttle_stick()
-        h = self.cfg.hover_throttle
-        return z / 0.5 * h if z <= 0.5 else h + (z - 0.5) / 0.5 * (1.0 - h)
-
-    def pilot_vertical(self, dt_s: float) -> None:
-        """ALT_HOLD/LOITER: stick = climb rate outside a 10 % dead zone, centre = hold.
-        Without pilot input the stick counts as centred (hold)."""
-        z = self.pilot.throttle if self._pilot_fresh() else 0.5
-        if z > 0.6:
-            self.command_climb(dt_s, (z - 0.6) / 0.4 * self.cfg.pilot_speed_up_m_s)
-        elif z < 0.4:
-            self.command_climb(dt_s, (z - 0.4) / 0.4 * self.cfg.pilot_speed_dn_m_s)
-        else:
-            self.command_vertical(dt_s, self.alt_hold_m)
-
-    def _radio_failsafe(self) -> None:
-        age = self.pilot.age_s()
-        if age is None or age <= self.cfg.rc_fs_timeout_s or getattr(self, "_rc_fs", False):
-            if age is not None and age <= self.cfg.rc_fs_timeout_s:
-                self._rc_fs = False
-            return
-        self._rc_fs = True
-        if self.armed and self.airborne and self.mode.number in (
-                CopterMode.STABILIZE, CopterMode.ALT_HOLD, CopterMode.LOITER):
-            self.statustext(mav.MAV_SEVERITY_CRITICAL, "Radio Failsafe")
-            target = CopterMode.RTL if self.home_set and self.position_ok() else CopterMode.LAND
-            self.set_mode_internal(target, "radio failsafe")
 
     # ---- outputs -------------------------------------------------------------------------
 
@@ -510,181 +364,6 @@ class Vehicle:
         if reason and number != CopterMode.LAND:
             log.info("%s: %s refused (%s), landing", why, M.MODE_NAMES.get(number), reason)
             self._change_mode(CopterMode.LAND)
-
-    # ============================================================================================
-    # VehicleCommands (run on this thread by GcsServer.service(); tests may call them directly)
-
-    def arm(self, force: bool):
-        if self.armed:
-            return ACCEPTED, None
-        if not force and self.cfg.arming_check:
-            reason = prearm_failure(self)
-            if reason:
-                return FAILED, reason
-        if self.est.valid:
-            self._set_home()
-        self.reset_vertical()
-        self.reset_horizontal()
-        self.alt_target_m = self.alt_hold_m = 0.0
-        self.yaw_target_rad = self.yaw_rad
-        self.yaw_rate_cmd = None
-        self.core.set_altitude_target(0.0)
-        if self.mode.manual_throttle:
-            self.core.set_throttle(0.0)
-        self.core.set_attitude_target(0.0, 0.0, yaw_rad=self.yaw_rad)
-        self.core.arm()
-        self.armed = True
-        self._landed_since_ns = self.sim_ns
-        self._event("armed")
-        return ACCEPTED, None
-
-    def disarm(self, force: bool):
-        if not self.armed:
-            return ACCEPTED, None
-        if self.airborne and not force:
-            return DENIED, "Disarm: vehicle is flying (force to disarm in flight)"
-        self._disarm(None)
-        return ACCEPTED, None
-
-    def set_mode(self, custom_mode: int):
-        if custom_mode == self.mode.number:
-            return ACCEPTED, None
-        reason = self._change_mode(custom_mode)
-        return (FAILED, reason) if reason else (ACCEPTED, None)
-
-    def takeoff(self, alt_m: float):
-        if not self.armed:
-            return FAILED, "Takeoff: vehicle not armed"
-        if self.mode.number != CopterMode.GUIDED:
-            return FAILED, f"Takeoff: not supported in {self.mode.name}, use GUIDED"
-        if self.airborne:
-            return FAILED, "Takeoff: already flying"
-        if not self.position_ok():
-            return FAILED, "Takeoff: need a position estimate (GPS)"
-        self.mode.start_takeoff(self, max(float(alt_m), self.cfg.takeoff_min_m))
-        self._landed_since_ns = None
-        return ACCEPTED, None
-
-    def land(self):
-        return self.set_mode(CopterMode.LAND)
-
-    def rtl(self):
-        return self.set_mode(CopterMode.RTL)
-
-    def mission_start(self, first: int, last: int):
-        if 0 < first < len(self.mission.items):
-            self.mission.current = first
-        if self.mode.number == CopterMode.AUTO:
-            # MISSION_START in AUTO (MAVSDK sends it after the mode change): (re)start
-            reason = self.mission.start(self, first if first > 0 else None)
-        else:
-            reason = self._change_mode(CopterMode.AUTO)
-        return (FAILED, reason) if reason else (ACCEPTED, None)
-
-    def reposition(self, lat_e7, lon_e7, alt_m, frame, speed_m_s, yaw_deg):
-        if not self.armed or not self.airborne:
-            return DENIED, "Reposition: take off first"
-        if self.est.origin is None:
-            return FAILED, "Reposition: no position estimate"
-        if self.mode.number != CopterMode.GUIDED:
-            reason = self._change_mode(CopterMode.GUIDED)
-            if reason:
-                return FAILED, reason
-        ne = self.est.origin.to_ne(lat_e7, lon_e7)
-        alt = alt_m if frame in (mav.MAV_FRAME_GLOBAL_RELATIVE_ALT,
-                                 mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT) \
-            else alt_m - self.home_alt_msl_m
-        speed = speed_m_s if math.isfinite(speed_m_s) and speed_m_s > 0 else None
-        self.mode.go_to(self, ne, alt, speed)
-        if math.isfinite(yaw_deg):
-            self.yaw_target_rad = math.radians(yaw_deg)
-        else:
-            self.face_track(rtl=False)
-        return ACCEPTED, None
-
-    def change_speed(self, speed_m_s: float, speed_type: int):
-        if speed_m_s > 0:
-            self.speed_override_m_s = float(speed_m_s)
-            self.wp.sp = self._wp_speeds(self.speed_override_m_s)
-        elif speed_m_s not in (-1.0, -2.0):
-            return DENIED, "Change speed: speed must be > 0 (or -1 for no change)"
-        return ACCEPTED, None
-
-    def mission_set_current(self, seq: int):
-        reason = self.mission.set_current(seq, self)
-        return (DENIED, reason) if reason else (ACCEPTED, None)
-
-    def mission_updated(self, items) -> None:
-        self.mission.set_items(items, self)
-        if self.mission_file:
-            from silbridge.mavlink.errors import MissionFileError
-            from silbridge.mavlink.wpl import save_wpl
-            try:
-                save_wpl(self.mission_file, items)
-            except (MissionFileError, OSError) as exc:
-                self.statustext(mav.MAV_SEVERITY_ERROR, f"Mission save failed: {exc}"[:150])
-
-    def set_position_target(self, t) -> None:
-        if self.mode.number != CopterMode.GUIDED or not self.armed or not self.airborne \
-                or self.est.origin is None:
-            self.setpoints_ignored += 1     # ArduCopter: take off first
-            return
-        mask = t.type_mask
-        use_pos = (mask & TYPE_MASK_POS) != TYPE_MASK_POS
-        use_vel = (mask & TYPE_MASK_VEL) != TYPE_MASK_VEL
-        c, s = math.cos(self.yaw_rad), math.sin(self.yaw_rad)
-        vel = tuple(t.vel_ned_m_s)
-        if t.is_global:
-            ne = self.est.origin.to_ne(int(t.x), int(t.y))
-            rel = t.frame in (mav.MAV_FRAME_GLOBAL_RELATIVE_ALT,
-                              mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-                              mav.MAV_FRAME_GLOBAL_TERRAIN_ALT,
-                              mav.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT)
-            alt = t.z if rel else t.z - self.home_alt_msl_m
-        elif t.frame == mav.MAV_FRAME_LOCAL_NED:
-            ne = (t.x, t.y)
-            alt = -t.z - (self.home_alt_msl_m - self.est.origin.alt_msl_m)
-        else:
-            dx, dy = t.x, t.y
-            if t.frame in (mav.MAV_FRAME_BODY_NED, mav.MAV_FRAME_BODY_OFFSET_NED):
-                dx, dy = dx * c - dy * s, dx * s + dy * c
-                vel = (vel[0] * c - vel[1] * s, vel[0] * s + vel[1] * c, vel[2])
-            ne = (self.est.pos_ne_m[0] + dx, self.est.pos_ne_m[1] + dy)
-            alt = self.alt_m - t.z
-        if not (mask & TYPE_MASK_YAW) and math.isfinite(t.yaw_rad):
-            self.yaw_target_rad = t.yaw_rad
-            self.yaw_rate_cmd = None
-        if use_pos and all(map(math.isfinite, (*ne, alt))):
-            self.mode.go_to(self, ne, alt)
-            if mask & TYPE_MASK_YAW:
-                self.face_track(rtl=False)
-        elif use_vel and all(map(math.isfinite, vel)):
-            self.mode.set_velocity(self, vel[:2], -vel[2])
-        else:
-            self.setpoints_ignored += 1
-
-    def set_attitude_target(self, t) -> None:
-        if self.mode.number != CopterMode.GUIDED or not self.armed or not self.airborne:
-            self.setpoints_ignored += 1
-            return
-        if t.type_mask & ATT_MASK_ATTITUDE or not all(map(math.isfinite, t.q_wxyz)):
-            self.setpoints_ignored += 1
-            return
-        w, x, y, z = t.q_wxyz
-        roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-        pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
-        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-        # ArduCopter (GUID_OPTIONS bit 3 clear): thrust 0.5 = hold, 0/1 = full descent/climb
-        th = min(1.0, max(0.0, t.thrust)) if math.isfinite(t.thrust) else 0.5
-        climb = (th - 0.5) * 2.0 * (self.cfg.wp.up_m_s if th >= 0.5 else self.cfg.wp.dn_m_s)
-        self.mode.set_attitude(self, roll, pitch, yaw, climb)
-
-    def manual_control(self, x, y, z, r, buttons) -> None:
-        self.pilot.manual_control(x, y, z, r)
-
-    def rc_override(self, channels_us) -> None:
-        self.pilot.rc_override(channels_us)
-
 
 def _git_hash() -> str:
     """AUTOPILOT_VERSION.flight_custom_version: the source's git hash (8 chars) if known."""

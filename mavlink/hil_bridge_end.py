@@ -165,7 +165,8 @@ class HilBridgeEnd:
 
     def _send_config(self) -> None:
         c = self.codec
-        frames = [c.heartbeat_encode(12, 8, 0, 0, 4).pack(c)]     # MAV_TYPE_GCS-like sim
+        # MAV_TYPE_GENERIC, MAV_AUTOPILOT_INVALID: a simulator, not a vehicle
+        frames = [c.heartbeat_encode(0, 8, 0, 0, 4).pack(c)]
         for word, name in _NAMES.items():
             frames.append(c.named_value_int_encode(0, name, int(self.words[word])).pack(c))
         lat, lon, alt = self.encoder.origin

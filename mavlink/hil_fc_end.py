@@ -69,7 +69,8 @@ class _Sensors:
         self.read += n
         return n
 
-    def wait(self, timeout_s: float) -> bool:
+    def wait(self, timeout_s: float, **_spin) -> bool:
+        """Sleep in select() until records arrive (spin/yield options of the ring: unused)."""
         end = self.end
         end.flush_pwm()
         deadline = time.monotonic() + timeout_s

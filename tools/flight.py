@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
-from silbridge.shm import Segment
 
 from .transport_wiring import (
     bridge_address,

@@ -45,6 +45,11 @@ def markdown(report: dict) -> str:
                      + " | ".join(_f(ts[n]["jitter_us"][q], "{:,.1f}") for n in names) + " |")
     lines.append("| drop ratio | | | " + " | ".join(_f(ts[n]["drop_ratio"], "{:.4%}")
                                                    for n in names) + " |")
+    for part, label in (("encode", "bridge encode"), ("parse", "FC parse (pymavlink)"),
+                        ("to_records", "FC record rebuild")):
+        cells = [_f((ts[n].get("codec_us_per_message") or {}).get(part), "{:.2f}")
+                 for n in names]
+        lines.append(f"| {label} (us per message) | | | " + " | ".join(cells) + " |")
     lines += ["", "Every step (IMU requested -> achieved at the FC):", "",
               "| transport | IMU requested | IMU achieved | baro | mag | PWM | latency p50/p95/p99 "
               "(us) | drop | overwrite | late steps | result |",

@@ -24,6 +24,16 @@
 #define FC_MAHONY_GNSS_STALE_S 0.5f
 /* Specific forces below this carry no usable direction (near free fall). */
 #define FC_MAHONY_GNSS_MIN_F_M_S2 (0.3f * FC_GRAVITY_M_S2)
+/* Heading-offset learning rate per rad of the GNSS error's down component
+ * [1/s]. That component is about -2 sin^2(tilt) times the heading error just
+ * after the acceleration reverses and decays as the tilt loop re-converges,
+ * so doublets every few seconds learn a declination error in 30 to 60 s
+ * (S4: 4.5 deg in about 40 s); slow on purpose, as GNSS noise and tilt errors
+ * along a one-way acceleration must average out. */
+#define FC_MAHONY_HEADING_LEARN_RATE 1.0f
+/* Declinations beyond this are outside inhabited latitudes' range: a bound
+ * against learning nonsense from a bad stretch. */
+#define FC_MAHONY_HEADING_OFFSET_MAX_RAD 0.35f
 
 void fc_mahony_configure(fc_mahony_t *m, const fc_mahony_config_t *cfg)
 {
@@ -56,6 +66,7 @@ void fc_mahony_init(fc_mahony_t *m, const fc_mahony_config_t *cfg)
     m->heading_err_rad = 0.0f;
     m->heading_age_s = 0.0f;
     m->heading_valid = false;
+    m->heading_offset_rad = 0.0f;
     m->still = false;
     for (int i = 0; i < 3; i++) {
         m->accel_ref_ned_m_s2[i] = 0.0f;
@@ -174,6 +185,14 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
         kp = cfg->kp_gnss;
         ki = cfg->ki_gnss;
         w = 1.0f; /* already free of the vehicle's acceleration: no trust weighting */
+        if (m->heading_valid && cfg->kmag > 0.0f) {
+            /* A positive down component means the estimate's heading is east of
+             * true: the magnetometer's reference must turn east too, as it is
+             * subtracted from the measured direction (fc_mahony_mag). */
+            m->heading_offset_rad = fc_constrainf(
+                m->heading_offset_rad + FC_MAHONY_HEADING_LEARN_RATE * m->gnss_err_down_rad * dt_s,
+                -FC_MAHONY_HEADING_OFFSET_MAX_RAD, FC_MAHONY_HEADING_OFFSET_MAX_RAD);
+        }
     }
     m->gnss_age_s += dt_s;
     const bool learn = fc_norm3(e) < FC_MAHONY_I_GATE_RAD;
@@ -236,7 +255,8 @@ fc_status_t fc_mahony_mag(fc_mahony_t *m, const float field_frd[3], float declin
     }
     /* With only a heading error d = yaw_est - yaw_true, R_est R_true^T = Rz(d), so the
      * rotated field points d (plus the declination) east of north. */
-    const float err = fc_wrap_pi(atan2f(field_ned[1], field_ned[0]) - declination_rad);
+    const float err =
+        fc_wrap_pi(atan2f(field_ned[1], field_ned[0]) - declination_rad - m->heading_offset_rad);
     if (!m->heading_valid) {
         /* First heading: take it at once rather than converging from yaw 0. */
         const float half = -0.5f * err;
@@ -274,6 +294,7 @@ void fc_mahony_gnss_forget(fc_mahony_t *m)
     for (int i = 0; i < 3; i++) {
         m->gnss_err_ned_rad[i] = 0.0f;
     }
+    m->gnss_err_down_rad = 0.0f;
     m->gnss_age_s = 0.0f;
     m->gnss_valid = false;
 }
@@ -306,6 +327,7 @@ fc_status_t fc_mahony_gnss(fc_mahony_t *m, const float f_imu_ned_m_s2[3],
      * body axes): R (a x b) = (R a) x (R b), so this is that error in NED. The
      * down component is a heading error; the magnetometer owns the heading. */
     fc_cross3(a, b, m->gnss_err_ned_rad);
+    m->gnss_err_down_rad = m->gnss_err_ned_rad[2];
     m->gnss_err_ned_rad[2] = 0.0f;
     m->gnss_age_s = 0.0f;
     m->gnss_valid = true;

@@ -43,6 +43,16 @@
  * integrator then learns a gyro bias in flight, where the accelerometer alone
  * cannot tell a bias-driven tilt from the thrust axis.
  *
+ * Heading offset: GNSS velocity is relative to true north, the magnetometer to
+ * magnetic north; a wrong COMPASS_DEC (ArduPilot sets it from a table, we take
+ * the parameter) turns the estimate's heading, and with a horizontal
+ * acceleration that heading error tilts the GNSS reference (by tan(tilt) of
+ * itself: 2.6 deg at 30 deg for the 4.5 deg of a zero COMPASS_DEC at Zurich).
+ * When the acceleration changes direction, the down component of the
+ * GNSS-aided error carries that heading error; it is integrated slowly into
+ * heading_offset_rad, which the magnetometer correction then subtracts. A
+ * steady acceleration or hover leaves the offset alone (the component is ~0).
+ *
  * Heading (paper 3.4: MAG goes to the yaw/heading corrector): each
  * magnetometer sample gives the heading error of the estimate (field rotated
  * to NED, its horizontal direction against magnetic north + declination); it
@@ -86,6 +96,8 @@ typedef struct fc_mahony {
     float gnss_err_ned_rad[3]; /* latest GNSS-aided tilt error, NED (down part 0) */
     float gnss_age_s;         /* time since it was measured [s] */
     bool gnss_valid;          /* a GNSS-aided error is held */
+    float gnss_err_down_rad;  /* down component of that error (heading information) */
+    float heading_offset_rad; /* magnetic heading offset learned from GNSS [rad] */
     float heading_err_rad;    /* latest magnetometer heading error (estimate - mag) */
     float heading_age_s;      /* time since that error was measured [s] */
     bool heading_valid;       /* a magnetometer sample has been used */

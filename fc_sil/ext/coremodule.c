@@ -337,7 +337,7 @@ static PyObject *Core_counters(CoreObject *self, PyObject *noargs)
 {
     (void)noargs;
     const fc_core_t *c = &self->core;
-    return Py_BuildValue("{s:K,s:K,s:K,s:K,s:K,s:K,s:K,s:L,s:K,s:O}", "imu",
+    return Py_BuildValue("{s:K,s:K,s:K,s:K,s:K,s:K,s:K,s:L,s:K,s:O,s:d}", "imu",
                          (unsigned long long)c->imu_count,
                          "rate_loop", (unsigned long long)c->loop_count, "pwm",
                          (unsigned long long)c->pwm_count, "rejected",
@@ -347,7 +347,8 @@ static PyObject *Core_counters(CoreObject *self, PyObject *noargs)
                          (unsigned long long)c->ins.rejected, "last_imu_ns",
                          (long long)c->last_imu_ns, "gnss_aid",
                          (unsigned long long)c->gnss_aid_count, "gnss_aid_active",
-                         fc_mahony_gnss_active(&c->ahrs) ? Py_True : Py_False);
+                         fc_mahony_gnss_active(&c->ahrs) ? Py_True : Py_False,
+                         "heading_offset_rad", (double)c->ahrs.heading_offset_rad);
 }
 
 static PyObject *Core_gnss(CoreObject *self, PyObject *noargs)

@@ -77,7 +77,8 @@ def test_s4_setpoints_ramps_steps_and_doublets():
     assert [e[0] for e in ramp] == list(range(10_010, 10_501, 10))
     assert ramp[0][1] == pytest.approx(a0 * 0.02)
     assert ramp[-1][1] == pytest.approx(a0)
-    # First pitch doublet is a step at 20 s: +A at once, -A after hold, then 0.
+    # First pitch doublet is a step at 20 s: +A at once, level after hold, -A after
+    # another hold, then level: every step is A, never 2A.
     p0 = math.radians(sc.setpoints[1].amplitude_deg[0])
     hold = sc.setpoints[1].hold_s[0]
     pitch_ev = [e for e in ev if 19_000 < e[0] < 30_000]
@@ -85,8 +86,9 @@ def test_s4_setpoints_ramps_steps_and_doublets():
         return -(-round(t_s * 1e9) // 1_000_000)
 
     assert [e[0] for e in pitch_ev] == [20_000, first_step_at(20.0 + hold),
-                                        first_step_at(20.0 + 2 * hold)]
-    assert [e[2] for e in pitch_ev] == pytest.approx([p0, -p0, 0.0])
+                                        first_step_at(20.0 + 2 * hold),
+                                        first_step_at(20.0 + 3 * hold)]
+    assert [e[2] for e in pitch_ev] == pytest.approx([p0, 0.0, -p0, 0.0])
     # Everything returns to level, altitude held.
     assert ev[-1][1] == 0.0 and ev[-1][2] == 0.0 and all(e[4] == 10.0 for e in ev)
 

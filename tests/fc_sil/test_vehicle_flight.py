@@ -205,3 +205,71 @@ def test_guided_velocity_target_stops_after_guid_timeout():
     fly_scripted(script, duration_s=25, params={"GUID_TIMEOUT": 2.0})
     assert 2.0 < st["v_during"] < 4.0
     assert st["v_after"] < 0.6
+
+
+def test_loiter_sticks_move_then_brake_stops_and_holds():
+    st = {}
+
+    def script(f):
+        v, t = f.v, f.t_s
+        if _once(st, "up", t > 3):
+            v.set_mode(CopterMode.GUIDED)
+            v.arm(False)
+            v.takeoff(8.0)
+        if _once(st, "loiter", t > 12):
+            st["r_loiter"] = v.set_mode(CopterMode.LOITER)
+            st["ne0"] = f.truth_ne_m()
+        if 12 < t < 18:
+            v.manual_control(600, 0, 500, 0, 0)        # stick 60 % forward, facing north
+        if _once(st, "brake", t > 18):
+            st["v_fwd"] = v.est.vel_ne_m_s[0]
+            st["r_brake"] = v.set_mode(CopterMode.BRAKE)
+        if t > 18:
+            v.manual_control(0, 0, 500, 0, 0)
+        if _once(st, "held", t > 24):
+            st["ne_a"] = f.truth_ne_m()
+        if _once(st, "end", t > 29):
+            st["ne_b"] = f.truth_ne_m()
+            st["agl"] = f.truth_agl_m()
+
+    f, res = fly_scripted(script, duration_s=30)
+    assert st["r_loiter"] == (ACCEPTED, None) and st["r_brake"] == (ACCEPTED, None)
+    assert st["v_fwd"] > 3.0
+    moved = math.hypot(st["ne_a"][0] - st["ne0"][0], st["ne_a"][1] - st["ne0"][1])
+    assert moved > 15.0
+    drift = math.hypot(st["ne_b"][0] - st["ne_a"][0], st["ne_b"][1] - st["ne_a"][1])
+    assert drift < 2.5, "BRAKE holds where it stopped"
+    assert abs(st["agl"] - 8.0) < 1.0
+    assert not res.crashed
+
+
+def test_stabilize_manual_throttle_and_global_int_target_in_guided():
+    from silbridge.mavlink.vehicle_api import PositionTarget
+
+    st = {}
+
+    def script(f):
+        v, t = f.v, f.t_s
+        if _once(st, "arm", t > 3):
+            v.set_mode(CopterMode.STABILIZE)
+            v.manual_control(0, 0, 0, 0, 0)
+            st["arm"] = v.arm(False)
+        if 3.2 < t < 8:
+            v.manual_control(0, 0, 700, 0, 0)          # above hover: climbs
+        if _once(st, "climbed", t > 8):
+            st["agl8"] = f.truth_agl_m()
+            st["guided"] = v.set_mode(CopterMode.GUIDED)
+            lat, lon = v.est.origin.to_latlon_e7(v.home_ne[0] + 15.0, v.home_ne[1] + 10.0)
+            v.set_position_target(PositionTarget(
+                0, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, 0b110111111000, True, lat, lon, 9.0,
+                (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0, 0.0, 255))
+        if _once(st, "there", t > 22):
+            st["ne"] = f.truth_ne_m()
+            st["agl"] = f.truth_agl_m()
+
+    f, res = fly_scripted(script, duration_s=23)
+    assert st["arm"] == (ACCEPTED, None) and st["guided"] == (ACCEPTED, None)
+    assert st["agl8"] > 2.0
+    assert math.hypot(st["ne"][0] - 15.0, st["ne"][1] - 10.0) < 5.0
+    assert abs(st["agl"] - 9.0) < 1.0
+    assert not res.crashed

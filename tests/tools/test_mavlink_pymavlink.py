@@ -81,7 +81,7 @@ def sitl():
 
 
 def test_refusals_only_the_real_vehicle_gives(sitl):
-    v, port = sitl(speed=8.0)
+    v, port = sitl(speed=8.0, processes=1)
     c = gcs_for(port)
     try:
         _ready(c, v)
@@ -123,6 +123,31 @@ def test_refusals_only_the_real_vehicle_gives(sitl):
     finally:
         c.close()
     assert v.alive(), v.stop()[-3000:]
+
+
+def test_gcs_heartbeat_loss_triggers_rtl(sitl):
+    v, port = sitl(speed=4.0, processes=1)
+    c = gcs_for(port)
+    try:
+        _ready(c, v)
+        c.send(mav.MAVLink_param_set_message(1, 1, b"FS_GCS_TIMEOUT", 2.0, 9))
+        assert wait_for(c, "PARAM_VALUE", lambda m: m.param_id == "FS_GCS_TIMEOUT") is not None
+        _takeoff(c, 6.0)
+        c.drain()
+        # silence: no more heartbeats from us (system 255 = SYSID_MYGCS); just listen
+        fs = c.wait("STATUSTEXT", lambda m: m.text == "GCS Failsafe", timeout_s=10.0)
+        assert fs is not None and fs.severity == mav.MAV_SEVERITY_CRITICAL
+        hb = c.wait("HEARTBEAT", lambda m: m.custom_mode == 6, timeout_s=5.0)
+        assert hb is not None, "not in RTL"
+        c.drain()
+        hb = c.wait("HEARTBEAT", timeout_s=3.0)
+        assert hb.system_status == mav.MAV_STATE_CRITICAL
+        # the GCS is back: failsafe clears, the vehicle stays in RTL and lands
+        assert wait_for(c, "STATUSTEXT", lambda m: "Cleared" in m.text, timeout_s=5) is not None
+        hb = wait_for(c, "HEARTBEAT", lambda m: not m.base_mode & 128, timeout_s=60)
+        assert hb is not None and hb.custom_mode == 6
+    finally:
+        c.close()
 
 
 def _fuzz_frames(rng, codec):

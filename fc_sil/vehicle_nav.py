@@ -1,0 +1,170 @@
+"""NavHelpers: the vehicle's navigation outputs, shared by every flight mode.
+
+A mixin of fc_sil/vehicle.py's Vehicle (it uses the vehicle's estimator, controllers and C
+core): modes call these instead of touching the core, so all modes share one position
+controller (nav_pos.py), one waypoint navigator (nav_wp.py) and one vertical channel, and the
+pilot's sticks (pilot.py) mean the same thing in every mode that reads them.
+
+Vertical channel: ``command_vertical`` moves an altitude target at WPNAV_SPEED_UP/_DN and
+hands it to the C core's altitude controller; ``command_climb`` asks the core for a climb
+rate; ``land_descent`` descends at WPNAV_SPEED_DN above LAND_ALT_LOW and LAND_SPEED below and
+reports touchdown from the core's land detector. Horizontal: ``hold_position`` runs the
+position controller (only once airborne: on the ground its integrators would wind up against
+friction) and leaves lean angles for the step's single attitude command.
+"""
+
+from __future__ import annotations
+
+import math
+
+from pymavlink.dialects.v20 import ardupilotmega as mav
+
+from silbridge.mavlink.vehicle_api import CopterMode
+
+from .nav_wp import WpSpeeds
+
+
+class NavHelpers:
+
+    def _wp_speeds(self, speed_m_s: float | None) -> WpSpeeds:
+        sp = self.cfg.wp
+        if speed_m_s:
+            return WpSpeeds(speed_m_s, sp.up_m_s, sp.dn_m_s, sp.accel_m_s2, sp.radius_m)
+        return sp
+
+    def reset_vertical(self) -> None:
+        self.alt_target_m = self.alt_m if self.airborne else min(self.alt_m, 0.0)
+        self.alt_hold_m = self.alt_m if self.airborne else 0.0
+
+    def reset_horizontal(self) -> None:
+        self.pos_ctl.reset(self.est.vel_ne_m_s)
+
+    def command_attitude(self, roll_rad: float, pitch_rad: float) -> None:
+        self.cmd_roll, self.cmd_pitch = roll_rad, pitch_rad
+
+    def command_throttle(self, throttle: float) -> None:
+        self.core.set_throttle(min(1.0, max(0.0, throttle)))
+        self.alt_target_m = self.alt_hold_m = self.alt_m
+
+    def command_vertical(self, dt_s: float, goal_m: float) -> None:
+        """Hold/approach an altitude, moving the target at WPNAV_SPEED_UP/_DN."""
+        sp = self.cfg.wp
+        if not self.airborne and goal_m <= 0.0:
+            self.alt_target_m = goal_m
+        else:
+            err = goal_m - self.alt_target_m
+            self.alt_target_m += max(-sp.dn_m_s * dt_s, min(sp.up_m_s * dt_s, err))
+        self.core.set_altitude_target(self.alt_target_m)
+
+    def command_climb(self, dt_s: float, climb_m_s: float) -> None:
+        self.core.set_climb_rate(climb_m_s)
+        self.alt_target_m = self.alt_hold_m = self.alt_m
+
+    def land_descent(self, dt_s: float) -> bool:
+        """LAND's vertical channel; True once touched down (the core's land detector)."""
+        self.landing = True
+        if self.armed and not self.airborne and self.spool != 2:
+            return True
+        fast = self.alt_m > self.cfg.land_alt_low_m
+        speed = self.cfg.wp.dn_m_s if fast else self.cfg.land_speed_m_s
+        self.core.set_climb_rate(-speed)
+        self.alt_target_m = self.alt_hold_m = 0.0
+        return False
+
+    def hold_position(self, dt_s: float, target_ne, vel_ne, speed_m_s: float) -> None:
+        if not self.airborne or not self.position_ok():
+            self.pos_ctl.reset(self.est.vel_ne_m_s if self.airborne else (0.0, 0.0))
+            self.command_attitude(0.0, 0.0)
+            return
+        roll, pitch = self.pos_ctl.update(dt_s, self.est.pos_ne_m, self.est.vel_ne_m_s,
+                                          target_pos=target_ne, target_vel=vel_ne,
+                                          speed_max_m_s=speed_m_s, yaw_rad=self.yaw_rad)
+        self.command_attitude(roll, pitch)
+
+    def start_track(self, dest_ne, alt_m: float, speed_m_s: float | None) -> None:
+        self.wp.sp = self._wp_speeds(speed_m_s or self.speed_override_m_s)
+        start_alt = self.alt_target_m if self.airborne else self.alt_m
+        speed = math.hypot(*self.est.vel_ne_m_s) if self.airborne else 0.0
+        self.wp.set_destination(self.est.pos_ne_m, start_alt, dest_ne, alt_m, speed)
+
+    def fly_track(self, dt_s: float) -> bool:
+        """Follow the active track; True when its destination is reached."""
+        tp, tv, talt = self.wp.update(dt_s, self.est.pos_ne_m, self.alt_m)
+        self.hold_position(dt_s, tp, tv, self.wp.sp.speed_m_s * 1.2)
+        self.alt_target_m = talt
+        self.alt_hold_m = self.wp.dest[2]
+        self.core.set_altitude_target(talt)
+        if not self.airborne and talt > 0.0:
+            self.takeoff_in_progress = True
+        return self.wp.reached(self.est.pos_ne_m, self.alt_m)
+
+    def track_dest_ne(self):
+        return self.wp.dest[0], self.wp.dest[1]
+
+    def face_track(self, rtl: bool) -> None:
+        b = self.wp.bearing_rad
+        behave = self.cfg.wp_yaw_behavior
+        if b is None or behave == 0 or (behave == 2 and rtl):
+            return
+        self.yaw_target_rad = b
+
+    def hold_heading(self) -> None:
+        self.yaw_rate_cmd = None
+
+    # ---- pilot ----------------------------------------------------------------------------
+
+    def _pilot_fresh(self) -> bool:
+        return self.pilot.fresh(self.cfg.rc_fs_timeout_s)
+
+    def pilot_sticks_rpy(self) -> tuple[float, float, float]:
+        if not self._pilot_fresh():
+            return 0.0, 0.0, 0.0
+        return self.pilot.roll, self.pilot.pitch, self.pilot.yaw
+
+    def pilot_throttle_stick(self) -> float:
+        """0..1; 0 without fresh pilot input (throttle down)."""
+        return self.pilot.throttle if self._pilot_fresh() else 0.0
+
+    def pilot_attitude(self) -> None:
+        r, p, y = self.pilot_sticks_rpy()
+        a = self.cfg.angle_max_rad
+        self.command_attitude(r * a, p * a)
+        self.pilot_yaw(y)
+
+    def pilot_yaw(self, yaw_in: float) -> None:
+        if abs(yaw_in) > 0.05:
+            self.yaw_rate_cmd = yaw_in * self.cfg.pilot_y_rate_rad_s
+            self.yaw_target_rad = self.yaw_rad
+        else:
+            self.yaw_rate_cmd = None
+
+    def pilot_throttle(self) -> float:
+        """STABILIZE: stick centre = hover throttle (ArduCopter's throttle curve)."""
+        z = self.pilot_throttle_stick()
+        h = self.cfg.hover_throttle
+        return z / 0.5 * h if z <= 0.5 else h + (z - 0.5) / 0.5 * (1.0 - h)
+
+    def pilot_vertical(self, dt_s: float) -> None:
+        """ALT_HOLD/LOITER: stick = climb rate outside a 10 % dead zone, centre = hold.
+        Without pilot input the stick counts as centred (hold)."""
+        z = self.pilot.throttle if self._pilot_fresh() else 0.5
+        if z > 0.6:
+            self.command_climb(dt_s, (z - 0.6) / 0.4 * self.cfg.pilot_speed_up_m_s)
+        elif z < 0.4:
+            self.command_climb(dt_s, (z - 0.4) / 0.4 * self.cfg.pilot_speed_dn_m_s)
+        else:
+            self.command_vertical(dt_s, self.alt_hold_m)
+
+    def _radio_failsafe(self) -> None:
+        age = self.pilot.age_s()
+        if age is None or age <= self.cfg.rc_fs_timeout_s:
+            self._rc_fs = False
+            return
+        if self._rc_fs:
+            return
+        self._rc_fs = True
+        if self.armed and self.airborne and self.mode.number in (
+                CopterMode.STABILIZE, CopterMode.ALT_HOLD, CopterMode.LOITER):
+            self.statustext(mav.MAV_SEVERITY_CRITICAL, "Radio Failsafe")
+            target = CopterMode.RTL if self.home_set and self.position_ok() else CopterMode.LAND
+            self.set_mode_internal(target, "radio failsafe")
