@@ -33,6 +33,7 @@ class RunSpec:
     params: tuple = ()            # ((name, value), ...) FC parameter overrides
     features_off: tuple = ()      # FC stabilisation features switched off
     variant: str = "full"         # ablation label
+    keep_log: bool = True         # False: delete the log once its metrics are computed
     windows: tuple = ((0.0, 10.0), (10.0, 30.0), (30.0, 120.0), (90.0, 120.0))
 
 
@@ -46,7 +47,12 @@ class RunResult:
 
 
 def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_seed: int = 1,
-               imu_hz=None, params=(), features_off=(), variant="full", windows=None):
+               imu_hz=None, params=(), features_off=(), variant="full", windows=None,
+               keep_logs: str = "all"):
+    """One RunSpec per (scenario, run). keep_logs: all | first (run 0 of each
+    scenario, enough for the report's traces) | none. A 120 s log is ~45 MB."""
+    if keep_logs not in ("all", "first", "none"):
+        raise CampaignError(f"keep_logs must be all, first or none, not {keep_logs!r}")
     specs = []
     for sc in scenarios:
         for i in range(runs):
@@ -56,7 +62,9 @@ def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_s
                                  duration_s=duration_s, log_path=str(log), imu_hz=imu_hz,
                                  params=tuple(params), features_off=tuple(features_off),
                                  variant=variant,
-                                 windows=windows or RunSpec.windows))
+                                 windows=windows or RunSpec.windows,
+                                 keep_log=keep_logs == "all" or (keep_logs == "first"
+                                                                 and i == 0)))
     return specs
 
 
@@ -79,6 +87,9 @@ def run_one(spec: RunSpec) -> RunResult:
     problems = check_log(log)
     w = spec.windows
     metrics = compute_metrics(log, Windows(warmup=w[0], transient=w[1], analysis=w[2], yaw=w[3]))
+    del log
+    if not spec.keep_log:
+        os.unlink(spec.log_path)
     return RunResult(spec=spec, metrics=metrics, summary=summary, problems=problems,
                      wall_s=time.perf_counter() - t0)
 

@@ -37,6 +37,9 @@ def add_campaign_arguments(p) -> None:
     p.add_argument("--yaw-window", type=float, nargs=2, default=(90.0, 120.0),
                    metavar=("A", "B"))
     p.add_argument("--out", default="bench-out", help="output folder (default bench-out)")
+    p.add_argument("--keep-logs", choices=("all", "first", "none"), default="first",
+                   help="MCAP logs to keep (~45 MB per 120 s run): all, first run of each "
+                        "scenario (default; the report's traces use it), none")
     p.add_argument("--no-report", action="store_true", help="skip the plots and index page")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
@@ -63,7 +66,8 @@ def run(args) -> int:
     scenarios, windows, params = campaign_inputs(args)
     out_dir = Path(args.out)
     specs = make_specs(scenarios, args.runs, args.duration, out_dir, base_seed=args.seed,
-                       imu_hz=args.imu_hz, params=params, windows=windows)
+                       imu_hz=args.imu_hz, params=params, windows=windows,
+                       keep_logs=args.keep_logs)
     t0 = time.monotonic()
     results = run_campaign(specs, jobs=args.jobs, executor=args.executor,
                            ray_address=args.ray_address)

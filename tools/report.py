@@ -127,7 +127,7 @@ def write_report(results, table_md: str, table_json: dict, out_dir: Path, *,
     seen = set()
     for r in results:
         name = scenario_key(r.spec.scenario)
-        if name in seen:
+        if name in seen or not Path(r.spec.log_path).exists():   # --keep-logs none
             continue
         seen.add(name)
         log = read_log(r.spec.log_path)
