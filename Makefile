@@ -18,7 +18,7 @@ SB      := $(VENV)/bin/silbridge
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
-	$(PIP) install -q --upgrade pip "setuptools>=69" wheel
+	$(PIP) install -q --upgrade pip "setuptools>=77" wheel
 
 sysdeps:
 	@./tools/install_sysdeps.sh

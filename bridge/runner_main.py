@@ -36,6 +36,7 @@ class BridgeRunConfig:
     rate_tolerance: float = 0.05    # +-5 % (paper 4.2 step 5)
     drop_tolerance: float = 0.005   # 0.5 % (paper 4.2 step 4)
     pwm_hz: float = 400.0
+    trace_hash: bool = True         # off only for stress tests: hashing 2 MHz IMU costs ~100 us/step
 
 
 @dataclass
@@ -144,7 +145,8 @@ def pwm_rate_hz(loop: BridgeLoop, cfg: BridgeRunConfig) -> float:
 def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None, sink=None,
                out=print) -> BridgeResult:
     """Run one flight; returns what the bridge measured. Raises a user-facing error on failure."""
-    loop = BridgeLoop(sim, seg, lockstep=cfg.lockstep, sink=sink, settle_s=cfg.settle_s)
+    loop = BridgeLoop(sim, seg, lockstep=cfg.lockstep, sink=sink, settle_s=cfg.settle_s,
+                      trace=cfg.trace_hash)
     checks = [check_sim_step(sim)]
     out(checks[-1].line())
     if not checks[-1].ok:

@@ -142,6 +142,50 @@ def rate_targets(err_frd_rad, ang_p=(4.5, 4.5, 0.0), rate_max_rad_s=(0.0, 0.0, 0
                                        yaw_rate_ff_rad_s)
 
 
+def rate_targets_ff(err_frd_rad, q_err_wxyz, ang_vel_target_rad_s, gyro_z_rad_s: float = 0.0,
+                    ang_p=(4.5, 4.5, 0.0), rate_max_rad_s=(0.0, 0.0, 0.0)):
+    """((roll, pitch, yaw) rate targets, feed-forward fade) with the target's
+    angular velocity fed forward (fc_attitude_rate_targets_ff)."""
+    return _core.attitude_rate_targets_ff(tuple(ang_p), tuple(rate_max_rad_s), tuple(err_frd_rad),
+                                          tuple(q_err_wxyz), tuple(ang_vel_target_rad_s),
+                                          gyro_z_rad_s)
+
+
+def sqrt_controller(error: float, p: float, second_ord_lim: float, dt_s: float) -> float:
+    return _core.sqrt_controller(error, p, second_ord_lim, dt_s)
+
+
+class Shaper:
+    """Attitude input shaping (fc_shaper): the target moving toward the command."""
+
+    COLUMNS = ("roll_rad", "pitch_rad", "yaw_rad", "roll_rate_rad_s", "pitch_rate_rad_s",
+               "yaw_rate_rad_s", "p_frd_rad_s", "q_frd_rad_s", "r_frd_rad_s")
+
+    def __init__(self, loop_hz: float, input_tc_s: float = _default("ATC_INPUT_TC"),
+                 accel_max_cdeg_s2=(_default("ATC_ACCEL_R_MAX"), _default("ATC_ACCEL_P_MAX"),
+                                    _default("ATC_ACCEL_Y_MAX")),
+                 rate_max_deg_s=(0.0, 0.0, 0.0), enable: bool = True, euler0_rad=(0, 0, 0)):
+        self._s = _state("shaper")
+        self.dt_s = 1.0 / loop_hz
+        self.cfg = (enable, input_tc_s,
+                    tuple(float(np.radians(a * 0.01)) for a in accel_max_cdeg_s2),
+                    tuple(float(np.radians(r)) for r in rate_max_deg_s))
+        self.reset(euler0_rad)
+
+    def reset(self, euler_rad=(0.0, 0.0, 0.0)) -> None:
+        _core.shaper_reset(self._s, tuple(float(v) for v in euler_rad))
+
+    def run(self, roll_rad, pitch_rad=0.0, yaw_rad=0.0, yaw_rate_rad_s=0.0,
+            hold_yaw=False, n: int | None = None) -> np.ndarray:
+        """Rows of COLUMNS, one per loop step; inputs broadcast to n steps."""
+        n = n if n is not None else len(np.atleast_1d(roll_rad))
+        cmd = np.empty((n, 4), np.float32)
+        for k, v in enumerate((roll_rad, pitch_rad, yaw_rad, yaw_rate_rad_s)):
+            cmd[:, k] = np.broadcast_to(v, n)
+        hold = np.ascontiguousarray(np.broadcast_to(hold_yaw, n), dtype=np.uint8)
+        return _core.shaper_run(self._s, self.cfg, cmd, hold, self.dt_s)
+
+
 class RatePID:
     """One axis of the rate loop (fc_rate_pid); outputs in us."""
 

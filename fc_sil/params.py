@@ -36,6 +36,7 @@ FEATURES = {
     "yaw_antiwindup": "SB_YAW_AW_EN", # yaw rate-PI anti-windup (paper 3.6)
     "slew": "SB_SLEW_EN",             # per-motor slew limit (paper 3.8)
     "gyro_bias": "SB_BIAS_EN",        # online gyro-bias estimation (Listing 3)
+    "shaping": "SB_SHAPE_EN",         # attitude input shaping + rate feed-forward (ArduCopter)
 }
 # The paper's ablation list (DESIGN.md "Ablation"): each switched off alone, then all.
 ABLATION_FEATURES = ("d_filter", "d_clamp", "trim_ramp", "trust_ema", "blend",

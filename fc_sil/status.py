@@ -17,7 +17,7 @@ STATUS_DTYPE = np.dtype([
     ("imu_sim_ns", "<i8"),                 # latest IMU sample used [ns]
     ("q_est_wxyz", "<f4", (4,)),           # estimated attitude, FRD -> NED
     ("euler_est_rad", "<f4", (3,)),        # roll, pitch, yaw
-    ("att_target_rad", "<f4", (3,)),       # commanded roll, pitch, yaw
+    ("att_target_rad", "<f4", (3,)),       # target roll, pitch, yaw (shaped, fc_shaper.h)
     ("att_error_frd_rad", "<f4", (3,)),    # blended small-angle error ex, ey, ez
     ("rate_target_frd_rad_s", "<f4", (3,)),
     ("rate_frd_rad_s", "<f4", (3,)),       # filtered, bias-corrected gyro of the rate loop

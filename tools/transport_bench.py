@@ -39,7 +39,7 @@ VARIANTS = {
 }
 DEFAULT_TRANSPORTS = ("shm", "udp", "tcp", "tcp-nofastcrc")
 DEFAULT_IMU_MAX_HZ = 2_000_000
-DEFAULT_DURATION_S = 2.0
+DEFAULT_DURATION_S = 1.5
 
 
 class TransportBenchError(Exception):
@@ -166,7 +166,7 @@ def run_step(transport: str, imu_hz: int, duration_s: float, fastcrc: bool) -> d
     sc, sim = make_simulator(opts)
     # No start-up checks inside the window: this run measures, it does not gate.
     cfg = BridgeRunConfig(duration_s=duration_s, lockstep=False, check_window_s=duration_s * 10,
-                          settle_s=duration_s)
+                          settle_s=duration_s, trace_hash=False)
     name = f"tbench-{os.getpid()}"
     if transport == "shm":   # 8 MiB of sensor ring: up to ~60 ms of 2 MHz IMU in flight
         seg_cm = Segment.create(name, sensor_slots=1 << 17)

@@ -67,6 +67,15 @@ static void derive_configs(fc_core_t *c)
     c->att_cfg.rate_max_rad_s[2] = p->atc_rate_y_max * FC_DEG_TO_RAD_F;
     c->angle_max_rad = p->angle_max * 0.01f * FC_DEG_TO_RAD_F;
 
+    c->shaper_cfg.enable = p->atc_rate_ff_enab != 0 && p->sb_shape_en != 0;
+    c->shaper_cfg.input_tc_s = p->atc_input_tc;
+    c->shaper_cfg.accel_max_rad_s2[0] = p->atc_accel_r_max * 0.01f * FC_DEG_TO_RAD_F;
+    c->shaper_cfg.accel_max_rad_s2[1] = p->atc_accel_p_max * 0.01f * FC_DEG_TO_RAD_F;
+    c->shaper_cfg.accel_max_rad_s2[2] = p->atc_accel_y_max * 0.01f * FC_DEG_TO_RAD_F;
+    for (int i = 0; i < 3; i++) {
+        c->shaper_cfg.rate_max_rad_s[i] = c->att_cfg.rate_max_rad_s[i];
+    }
+
     /* ArduPilot's normalised mixer output 1.0 moves a motor by half the PWM range
      * (its quad-X roll/pitch factors are normalised to 0.5). */
     const float range_us = (float)(p->mot_pwm_max - p->mot_pwm_min);
@@ -236,6 +245,7 @@ void fc_core_reset(fc_core_t *c)
         c->att_target_rad[i] = 0.0f;
         c->rate_frd_rad_s[i] = 0.0f;
     }
+    fc_shaper_reset(&c->shaper, c->att_target_rad);
     c->spool = FC_SPOOL_SHUT_DOWN;
     c->armed_prev = 0;
     c->imu_count = 0;
@@ -335,6 +345,58 @@ static bool gt_fresh(int64_t now_ns, int64_t gt_ns, bool have)
     return have && now_ns - gt_ns <= FC_GT_STALE_NS && gt_ns - now_ns <= FC_GT_STALE_NS;
 }
 
+/* Attitude stage: (shaped) target -> blended error e -> rate targets. */
+static void run_attitude(fc_core_t *c, float w, float dt_s, float e[3])
+{
+    const float roll_t = fc_constrainf(c->in.roll_target_rad, -c->angle_max_rad, c->angle_max_rad);
+    const float pitch_t =
+        fc_constrainf(c->in.pitch_target_rad, -c->angle_max_rad, c->angle_max_rad);
+    const bool hold_yaw = c->in.yaw_hold != 0 && c->att_cfg.ang_p[2] > 0.0f;
+    const float yaw_rate_ff = (c->in.yaw_hold != 0) ? 0.0f : c->in.yaw_rate_target_rad_s;
+    float euler[3];
+    fc_quat_to_euler(c->ahrs.q_wxyz, euler);
+    if (c->shaper_cfg.enable) {
+        if (c->spool != FC_SPOOL_FLIGHT) {
+            /* On the ground the target rests on the vehicle's own attitude
+             * (ArduCopter relax_attitude_controllers): take-off shapes from there. */
+            fc_shaper_reset(&c->shaper, euler);
+        }
+        fc_shaper_update(&c->shaper, &c->shaper_cfg, roll_t, pitch_t, c->in.yaw_target_rad,
+                         yaw_rate_ff, hold_yaw, dt_s);
+        if (!hold_yaw) {
+            fc_shaper_set_yaw(&c->shaper, euler[2]); /* rate damping: no heading error */
+        }
+        const float *t = c->shaper.euler_rad;
+        float q_t[4], q_err[4];
+        fc_quat_from_euler(t[0], t[1], t[2], q_t);
+        fc_attitude_error_q(c->ahrs.q_wxyz, q_t, q_err, e);
+        if (w > 0.0f) {
+            float e_gt[3], q_err_gt[4];
+            fc_attitude_error_q(c->gt_q_wxyz, q_t, q_err_gt, e_gt);
+            fc_blend_mix(w, e, e_gt, e, 3);
+        }
+        (void)fc_attitude_rate_targets_ff(&c->att_cfg, e, q_err, c->shaper.ang_vel_frd_rad_s,
+                                          c->rate_frd_rad_s[2], c->rate_target_frd_rad_s);
+        for (int i = 0; i < 3; i++) {
+            c->att_target_rad[i] = t[i];
+        }
+    } else {
+        fc_attitude_error(c->ahrs.q_wxyz, roll_t, pitch_t, c->in.yaw_target_rad, hold_yaw, e);
+        if (w > 0.0f) {
+            float e_gt[3];
+            fc_attitude_error(c->gt_q_wxyz, roll_t, pitch_t, c->in.yaw_target_rad, hold_yaw,
+                              e_gt);
+            fc_blend_mix(w, e, e_gt, e, 3);
+        }
+        fc_attitude_rate_targets(&c->att_cfg, e, yaw_rate_ff, c->rate_target_frd_rad_s);
+        c->att_target_rad[0] = roll_t;
+        c->att_target_rad[1] = pitch_t;
+        c->att_target_rad[2] = hold_yaw ? c->in.yaw_target_rad : euler[2];
+        /* Kept on the command, so switching shaping on continues from here. */
+        fc_shaper_reset(&c->shaper, c->att_target_rad);
+    }
+}
+
 static void run_rate_loop(fc_core_t *c, float dt_s)
 {
     const fc_params_t *p = &c->params;
@@ -342,19 +404,15 @@ static void run_rate_loop(fc_core_t *c, float dt_s)
     const float want_gt = (p->sb_att_src == 1 && gt_ok) ? 1.0f : 0.0f;
     const float w = fc_blend_update(&c->blend, want_gt, p->sb_blend_tc, p->sb_blend_en != 0, dt_s);
 
-    const float roll_t = fc_constrainf(c->in.roll_target_rad, -c->angle_max_rad, c->angle_max_rad);
-    const float pitch_t =
-        fc_constrainf(c->in.pitch_target_rad, -c->angle_max_rad, c->angle_max_rad);
-    const bool hold_yaw = c->in.yaw_hold != 0 && c->att_cfg.ang_p[2] > 0.0f;
-    float e[3];
-    fc_attitude_error(c->ahrs.q_wxyz, roll_t, pitch_t, c->in.yaw_target_rad, hold_yaw, e);
-    if (w > 0.0f) {
-        float e_gt[3];
-        fc_attitude_error(c->gt_q_wxyz, roll_t, pitch_t, c->in.yaw_target_rad, hold_yaw, e_gt);
-        fc_blend_mix(w, e, e_gt, e, 3);
+    for (int i = 0; i < 3; i++) {
+        /* The estimator's whole bias estimate is bias - integrator (fc_mahony.h);
+         * without removing it the rate loop would hold the vehicle bias/ATC_ANG_P
+         * off its attitude target. */
+        c->rate_frd_rad_s[i] =
+            c->ins.gyro_frd_rad_s[i] - (c->ahrs.bias_rad_s[i] - c->ahrs.integ_rad_s[i]);
     }
-    const float yaw_rate_ff = (c->in.yaw_hold != 0) ? 0.0f : c->in.yaw_rate_target_rad_s;
-    fc_attitude_rate_targets(&c->att_cfg, e, yaw_rate_ff, c->rate_target_frd_rad_s);
+    float e[3];
+    run_attitude(c, w, dt_s, e);
 
     const bool flying = c->spool == FC_SPOOL_FLIGHT;
     const bool integrate = flying && c->airborne;
@@ -363,11 +421,6 @@ static void run_rate_loop(fc_core_t *c, float dt_s)
                            (sat & FC_SAT_YAW) != 0};
     float out_us[3];
     for (int i = 0; i < 3; i++) {
-        /* The estimator's whole bias estimate is bias - integrator (fc_mahony.h);
-         * without removing it the rate loop would hold the vehicle bias/ATC_ANG_P
-         * off its attitude target. */
-        c->rate_frd_rad_s[i] =
-            c->ins.gyro_frd_rad_s[i] - (c->ahrs.bias_rad_s[i] - c->ahrs.integ_rad_s[i]);
         out_us[i] = fc_rate_pid_update(&c->pid[i], c->rate_target_frd_rad_s[i],
                                        c->rate_frd_rad_s[i], dt_s, limit[i], integrate);
         if (!integrate) {
@@ -376,11 +429,6 @@ static void run_rate_loop(fc_core_t *c, float dt_s)
     }
     fc_trim_update(&c->trim, &c->trim_cfg, c->airborne != 0, e[0], e[1], dt_s, c->trim_us);
 
-    float euler[3];
-    fc_quat_to_euler(c->ahrs.q_wxyz, euler);
-    c->att_target_rad[0] = roll_t;
-    c->att_target_rad[1] = pitch_t;
-    c->att_target_rad[2] = hold_yaw ? c->in.yaw_target_rad : euler[2];
     for (int i = 0; i < 3; i++) {
         c->att_err_frd_rad[i] = e[i];
     }

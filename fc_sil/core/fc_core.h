@@ -4,7 +4,8 @@
  * extension here; a real flight controller's scheduler later).
  *
  *   IMU sample : front-end filters -> Mahony -> vertical prediction; then,
- *                decimated to at most SB_LOOP_HZ: EST/GT blend -> attitude P
+ *                decimated to at most SB_LOOP_HZ: EST/GT blend -> input
+ *                shaping of the attitude target -> attitude P + target-rate feed-forward
  *                -> rate PI+D (x3) -> hover trim -> mixer inputs cr, cp, cy.
  *   PWM period : spool logic (arming, take-off, lift-off and landing
  *                detection) -> altitude controller -> mixer, clamp, slew ->
@@ -40,6 +41,7 @@
 #include "fc_mixer.h"
 #include "fc_params.h"
 #include "fc_rate_pid.h"
+#include "fc_shaper.h"
 #include "fc_status.h"
 #include "fc_trim.h"
 
@@ -50,7 +52,7 @@ typedef struct fc_core_status {
     int64_t imu_sim_ns;              /* latest IMU sample used [ns] */
     float q_est_wxyz[4];             /* estimated attitude, body FRD -> NED */
     float euler_est_rad[3];          /* roll, pitch, yaw of the estimate [rad] */
-    float att_target_rad[3];         /* commanded roll, pitch, yaw [rad] */
+    float att_target_rad[3];         /* target roll, pitch, yaw: the shaped target [rad] */
     float att_error_frd_rad[3];      /* blended small-angle error ex, ey, ez [rad] */
     float rate_target_frd_rad_s[3];  /* rate-loop targets [rad/s] */
     float rate_frd_rad_s[3];         /* filtered, bias-corrected gyro of the rate loop [rad/s] */
@@ -112,6 +114,7 @@ typedef struct fc_core {
     fc_mahony_config_t ahrs_cfg;        /* in flight (armed) */
     fc_mahony_config_t ahrs_ground_cfg; /* disarmed: fast alignment and bias learning */
     fc_attitude_config_t att_cfg;
+    fc_shaper_config_t shaper_cfg;
     fc_rate_pid_config_t pid_cfg[3];
     fc_trim_config_t trim_cfg;
     fc_mixer_config_t mix_cfg;
@@ -123,6 +126,7 @@ typedef struct fc_core {
     /* blocks */
     fc_ins_t ins;
     fc_mahony_t ahrs;
+    fc_shaper_t shaper;      /* shaped attitude target (input shaping) */
     fc_rate_pid_t pid[3];
     fc_trim_t trim;
     fc_blend_t blend;

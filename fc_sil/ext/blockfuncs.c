@@ -21,6 +21,7 @@
 #include "fc_mahony.h"
 #include "fc_mixer.h"
 #include "fc_rate_pid.h"
+#include "fc_shaper.h"
 #include "fc_trim.h"
 
 /* A C-contiguous float32 array of shape (n,) or (n, cols); NULL + error otherwise. */
@@ -72,7 +73,8 @@ static PyObject *block_sizes(PyObject *m, PyObject *noargs)
 {
     (void)m;
     (void)noargs;
-    return Py_BuildValue("{s:n,s:n,s:n,s:n,s:n,s:n,s:n,s:n,s:n}", "filter",
+    return Py_BuildValue("{s:n,s:n,s:n,s:n,s:n,s:n,s:n,s:n,s:n,s:n}", "shaper",
+                         (Py_ssize_t)sizeof(fc_shaper_t), "filter",
                          (Py_ssize_t)sizeof(fc_filter_t), "ins", (Py_ssize_t)sizeof(fc_ins_t),
                          "mahony", (Py_ssize_t)sizeof(fc_mahony_t), "rate_pid",
                          (Py_ssize_t)sizeof(fc_rate_pid_t), "trim", (Py_ssize_t)sizeof(fc_trim_t),
@@ -414,6 +416,109 @@ static PyObject *attitude_rate_targets(PyObject *m, PyObject *args)
     return Py_BuildValue("(ddd)", (double)r[0], (double)r[1], (double)r[2]);
 }
 
+/* ---- input shaping -------------------------------------------------------------- */
+
+static int parse_shaper_cfg(PyObject *t, fc_shaper_config_t *cfg)
+{
+    int enable;
+    if (!PyArg_ParseTuple(t, "pf(fff)(fff)", &enable, &cfg->input_tc_s, &cfg->accel_max_rad_s2[0],
+                          &cfg->accel_max_rad_s2[1], &cfg->accel_max_rad_s2[2],
+                          &cfg->rate_max_rad_s[0], &cfg->rate_max_rad_s[1],
+                          &cfg->rate_max_rad_s[2])) {
+        return 0;
+    }
+    cfg->enable = enable != 0;
+    return 1;
+}
+
+static PyObject *shaper_reset(PyObject *m, PyObject *args)
+{
+    (void)m;
+    Py_buffer b;
+    float e[3];
+    if (!PyArg_ParseTuple(args, "w*(fff)", &b, &e[0], &e[1], &e[2])) {
+        return NULL;
+    }
+    fc_shaper_t *s = fc_ext_state(&b, sizeof *s, "shaper");
+    if (s) {
+        fc_shaper_reset(s, e);
+    }
+    PyBuffer_Release(&b);
+    if (!s) {
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
+/* cmd: (n, 4) roll, pitch, yaw, yaw rate; hold: (n,) flags. Returns (n, 9):
+ * target roll, pitch, yaw, their Euler rates, body angular velocity. */
+static PyObject *shaper_run(PyObject *m, PyObject *args)
+{
+    (void)m;
+    Py_buffer b;
+    PyObject *cfgt, *co, *ho;
+    float dt;
+    if (!PyArg_ParseTuple(args, "w*O!OOf", &b, &PyTuple_Type, &cfgt, &co, &ho, &dt)) {
+        return NULL;
+    }
+    PyObject *out = NULL;
+    PyArrayObject *cmd = NULL, *hold = NULL;
+    fc_shaper_config_t cfg;
+    fc_shaper_t *s = fc_ext_state(&b, sizeof *s, "shaper");
+    if (s && parse_shaper_cfg(cfgt, &cfg) && (cmd = f32_in(co, 4, "cmd"))
+        && (hold = u8_in(ho, "hold_yaw")) && same_len(PyArray_DIM(cmd, 0), hold)) {
+        const npy_intp n = PyArray_DIM(cmd, 0);
+        out = f32_out(n, 9);
+        if (out) {
+            const float *c = PyArray_DATA(cmd);
+            const uint8_t *h = PyArray_DATA(hold);
+            float *o = PyArray_DATA((PyArrayObject *)out);
+            for (npy_intp i = 0; i < n; i++) {
+                const float *ci = &c[4 * i];
+                fc_shaper_update(s, &cfg, ci[0], ci[1], ci[2], ci[3], h[i] != 0, dt);
+                float *row = &o[9 * i];
+                for (int k = 0; k < 3; k++) {
+                    row[k] = s->euler_rad[k];
+                    row[3 + k] = s->euler_rate_rad_s[k];
+                    row[6 + k] = s->ang_vel_frd_rad_s[k];
+                }
+            }
+        }
+    }
+    Py_XDECREF(cmd);
+    Py_XDECREF(hold);
+    PyBuffer_Release(&b);
+    return out;
+}
+
+static PyObject *sqrt_controller(PyObject *m, PyObject *args)
+{
+    (void)m;
+    float err, p, lim, dt;
+    if (!PyArg_ParseTuple(args, "ffff", &err, &p, &lim, &dt)) {
+        return NULL;
+    }
+    return PyFloat_FromDouble((double)fc_sqrt_controller(err, p, lim, dt));
+}
+
+/* Rate targets with feed-forward: (ang_p3, rate_max3, err3, q_err4, ang_vel_target3, gyro_z)
+ * -> ((r, p, y), fade). */
+static PyObject *attitude_rate_targets_ff(PyObject *m, PyObject *args)
+{
+    (void)m;
+    fc_attitude_config_t cfg;
+    float e[3], q[4], w[3], gz;
+    if (!PyArg_ParseTuple(args, "(fff)(fff)(fff)(ffff)(fff)f", &cfg.ang_p[0], &cfg.ang_p[1],
+                          &cfg.ang_p[2], &cfg.rate_max_rad_s[0], &cfg.rate_max_rad_s[1],
+                          &cfg.rate_max_rad_s[2], &e[0], &e[1], &e[2], &q[0], &q[1], &q[2], &q[3],
+                          &w[0], &w[1], &w[2], &gz)) {
+        return NULL;
+    }
+    float r[3];
+    const float fade = fc_attitude_rate_targets_ff(&cfg, e, q, w, gz, r);
+    return Py_BuildValue("((ddd)d)", (double)r[0], (double)r[1], (double)r[2], (double)fade);
+}
+
 /* ---- rate PID ------------------------------------------------------------------ */
 
 static int parse_pid_cfg(PyObject *t, fc_rate_pid_config_t *cfg)
@@ -730,6 +835,11 @@ PyMethodDef fc_ext_block_methods[] = {
     {"attitude_error", attitude_error, METH_VARARGS, "attitude_error(q, roll, pitch, yaw, hold)"},
     {"attitude_rate_targets", attitude_rate_targets, METH_VARARGS,
      "attitude_rate_targets(ang_p3, rate_max3, err3, yaw_rate_ff)"},
+    {"attitude_rate_targets_ff", attitude_rate_targets_ff, METH_VARARGS,
+     "attitude_rate_targets_ff(ang_p3, rate_max3, err3, q_err4, ang_vel3, gyro_z)"},
+    {"shaper_reset", shaper_reset, METH_VARARGS, "shaper_reset(buf, euler3)"},
+    {"shaper_run", shaper_run, METH_VARARGS, "shaper_run(buf, cfg, cmd (n,4), hold, dt) -> (n,9)"},
+    {"sqrt_controller", sqrt_controller, METH_VARARGS, "sqrt_controller(err, p, lim, dt)"},
     {"pid_init", pid_init, METH_VARARGS, "pid_init(buf, cfg_tuple, dt[, configure_only])"},
     {"pid_run", pid_run, METH_VARARGS, "pid_run(buf, target, meas, dt, limit, integrate)"},
     {"trim_reset", trim_reset, METH_VARARGS, "trim_reset(buf)"},

@@ -147,3 +147,10 @@ def test_radio_failsafe_when_pilot_input_stops_in_alt_hold():
     assert st["ah"] == (ACCEPTED, None)
     assert "RTL" in st["modes"]
     assert any(m[2] == "Radio Failsafe" for m in f.v.messages)
+
+
+def test_gps_loss_in_a_position_mode_lands():
+    f, res, st = _hover_then(lambda f, st: None, 22, core=DroppingCore(Kind.GNSS, 12.0))
+    assert f.v.mode.number == CopterMode.LAND
+    assert any("lost GPS position" in m[2] for m in f.v.messages)
+    assert not res.crashed

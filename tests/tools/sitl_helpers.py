@@ -7,9 +7,11 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 import uuid
 
@@ -38,28 +40,73 @@ def free_udp_port() -> int:
 
 
 class SitlVehicle:
-    """`silbridge fly --speed X` with the given MAVLink endpoints; stop() ends it."""
+    """`silbridge fly --speed X` with the given MAVLink endpoints; stop() ends it.
+
+    The constructor returns once the bridge has passed its start-up checks. Those checks
+    measure the IMU and PWM rates over the first second of sim time, on the wall clock in real
+    time: on a loaded 2-core machine a run at --speed 8 can miss them (the machine, not the
+    vehicle, was too slow for that second); such a start is retried, up to `attempts` times.
+    A vehicle that fails for any other reason fails the test at once.
+    """
 
     def __init__(self, gcs_urls, *, speed: float = 8.0, duration_s: float = 600.0,
-                 processes: int = 2, extra=(), json_out: bool = False, cwd=None):
-        cmd = [sys.executable, "-m", "silbridge.tools", "fly", "--speed", str(speed),
-               "--duration", str(duration_s), "--processes", str(processes), "--no-default-gcs",
-               "--instance", f"sitl-{os.getpid()}-{uuid.uuid4().hex[:8]}"]
+                 processes: int = 2, extra=(), json_out: bool = False, cwd=None,
+                 attempts: int = 3, wait_checks: bool = True):
+        self.cmd = [sys.executable, "-m", "silbridge.tools", "fly", "--speed", str(speed),
+                    "--duration", str(duration_s), "--processes", str(processes),
+                    "--no-default-gcs"]
         for url in gcs_urls:
-            cmd += ["--gcs", url]
-        cmd += list(extra)
+            self.cmd += ["--gcs", url]
+        self.cmd += list(extra)
         if json_out:
-            cmd.append("--json")
+            self.cmd.append("--json")
         self.speed = speed
         self.urls = list(gcs_urls)
-        self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                     text=True, cwd=cwd)
+        self.cwd = cwd
+        for attempt in range(attempts):
+            self._spawn()
+            if not wait_checks or self._wait_checks(90.0):
+                return
+            err = self.stop()
+            if "start-up check" not in err or attempt == attempts - 1:
+                raise AssertionError(f"the vehicle did not start:\n{err[-3000:]}")
+
+    def _spawn(self) -> None:
+        name = f"sitl-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+        self.proc = subprocess.Popen(self.cmd + ["--instance", name], stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True, cwd=self.cwd)
+        self.out_lines: list[str] = []
+        self.err_lines: list[str] = []
+        self._readers = [threading.Thread(target=self._pump, args=(f, dst), daemon=True)
+                         for f, dst in ((self.proc.stdout, self.out_lines),
+                                        (self.proc.stderr, self.err_lines))]
+        for t in self._readers:
+            t.start()
+
+    @staticmethod
+    def _pump(f, dst) -> None:
+        for line in f:
+            dst.append(line)
+
+    def _wait_checks(self, timeout_s: float) -> bool:
+        """True once the bridge reports its last start-up check passed."""
+        end = time.monotonic() + timeout_s
+        while time.monotonic() < end:
+            if any(line.startswith("check drops") for line in self.out_lines + self.err_lines):
+                return True
+            if self.proc.poll() is not None:
+                return False
+            time.sleep(0.05)
+        return False
 
     def alive(self) -> bool:
         return self.proc.poll() is None
 
     def wait(self, timeout_s: float) -> tuple[str, str]:
-        return self.proc.communicate(timeout=timeout_s)
+        self.proc.wait(timeout=timeout_s)
+        for t in self._readers:
+            t.join(timeout=5.0)
+        return "".join(self.out_lines), "".join(self.err_lines)
 
     def summary(self, timeout_s: float) -> dict:
         out, err = self.wait(timeout_s)
@@ -69,14 +116,15 @@ class SitlVehicle:
         raise AssertionError(f"no JSON summary; stderr:\n{err[-3000:]}")
 
     def stop(self) -> str:
+        """Ctrl-C (SIGINT), as a user stops it: the flight unwinds, the MAVLink server saves
+        pending parameters and the shared-memory segment is removed; SIGKILL if it hangs."""
         if self.proc.poll() is None:
-            self.proc.terminate()
+            self.proc.send_signal(signal.SIGINT)
         try:
-            _, err = self.proc.communicate(timeout=15)
+            return self.wait(15.0)[1]
         except subprocess.TimeoutExpired:
             self.proc.kill()
-            _, err = self.proc.communicate()
-        return err or ""
+            return self.wait(15.0)[1]
 
 
 def gcs_for(port: int) -> GcsClient:

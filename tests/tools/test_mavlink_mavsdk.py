@@ -18,6 +18,9 @@ sys.path.insert(0, os.path.dirname(__file__))
 from sitl_helpers import SitlVehicle, free_udp_port  # noqa: E402
 
 mavsdk = pytest.importorskip("mavsdk")
+if not hasattr(mavsdk, "Mavsdk"):
+    pytest.skip("these tests use the MAVSDK 4.x Python binding (pip install 'mavsdk>=4')",
+                allow_module_level=True)
 
 from mavsdk import ComponentType, Configuration, Mavsdk  # noqa: E402
 from mavsdk.plugins.action import Action  # noqa: E402

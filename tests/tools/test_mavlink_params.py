@@ -120,7 +120,7 @@ def test_a_broken_parm_file_stops_the_start_with_a_clear_message(tmp_path, bad):
     parm = tmp_path / "bad.parm"
     parm.write_text(bad)
     v = SitlVehicle([f"udpin:127.0.0.1:{free_udp_port()}"], speed=4.0, processes=1,
-                    extra=["--params", str(parm)], duration_s=5)
+                    extra=["--params", str(parm)], duration_s=5, wait_checks=False)
     out, err = v.wait(60)
     assert v.proc.returncode == 2
     assert "bad.parm:1" in err and "Traceback" not in err
