@@ -35,7 +35,6 @@ test: setup
 bench: setup
 	$(SB) bench --out $(BENCH_OUT) $(BENCH_ARGS)
 	$(SB) transport --out $(BENCH_OUT)/transport
-	$(SB) shm-bench
 
 clean:
 	rm -rf build *.egg-info shm/*.so fc_sil/*.so .pytest_cache
