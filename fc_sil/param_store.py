@@ -37,11 +37,14 @@ class CoreParamStore:
         self._shadow = _core.Core()
         self._host: dict[str, float] = {}
         for p in P.PARAMS:
-            v = core.get_param(p.name)
             if p.host:
-                self._host[p.name] = v
-            else:
-                self._shadow.set_param(p.index, v)
+                self._host[p.name] = core.get_param(p.name)
+        # Two passes: a value the core's cross-parameter rules refuse against a default
+        # (MOT_PWM_MIN 1950 while MOT_PWM_MAX is still 2000) is accepted once its partner moved.
+        for _ in range(2):
+            for p in P.PARAMS:
+                if not p.host:
+                    self._shadow.set_param(p.index, core.get_param(p.name))
         self._names = tuple(p.name for p in P.PARAMS)
         self._queue: collections.deque[tuple[str, float]] = collections.deque()
         self.version = 0          # bumped on every accepted set (outer loops re-read then)

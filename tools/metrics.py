@@ -18,7 +18,10 @@ att_max_deg      d = commanded (att_target_rad) - TRUE attitude (ZYX Euler of
                  status time), wrapped to +-180 deg. RMS, 95th percentile
                  (linear interpolation) and maximum of e. Yaw is excluded: it is
                  rate-damped with no heading target. att_rms_roll_deg and
-                 att_rms_pitch_deg: per axis.
+                 att_rms_pitch_deg: per axis. The commanded attitude is the
+                 FC's attitude target after input shaping (ATC_INPUT_TC,
+                 ATC_ACCEL_*_MAX), what ArduCopter logs as ATT.DesRoll/DesPitch;
+                 with SB_SHAPE_EN = 0 it is the raw scenario/GCS command.
 yaw_rate_rad_s   Steady yaw rate: mean TRUE body z rate (/gt_att
                  rates_frd_rad_s[2]) over the yaw window (90-120 s);
                  yaw_rate_abs_rad_s: mean of its magnitude.

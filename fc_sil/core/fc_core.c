@@ -357,9 +357,10 @@ static void run_attitude(fc_core_t *c, float w, float dt_s, float e[3])
     fc_quat_to_euler(c->ahrs.q_wxyz, euler);
     if (c->shaper_cfg.enable) {
         if (c->spool != FC_SPOOL_FLIGHT) {
-            /* On the ground the target rests on the vehicle's own attitude
-             * (ArduCopter relax_attitude_controllers): take-off shapes from there. */
-            fc_shaper_reset(&c->shaper, euler);
+            /* On the ground, as ArduCopter's make_safe_ground_handling: the
+             * heading target rests on the vehicle's heading, while roll and
+             * pitch keep shaping toward their commands. */
+            fc_shaper_reset_yaw(&c->shaper, euler[2]);
         }
         fc_shaper_update(&c->shaper, &c->shaper_cfg, roll_t, pitch_t, c->in.yaw_target_rad,
                          yaw_rate_ff, hold_yaw, dt_s);

@@ -141,6 +141,14 @@ void fc_shaper_set_yaw(fc_shaper_t *s, float yaw_rad)
     s->euler_rad[2] = fc_wrap_pi(yaw_rad);
 }
 
+void fc_shaper_reset_yaw(fc_shaper_t *s, float yaw_rad)
+{
+    fc_shaper_set_yaw(s, yaw_rad);
+    s->euler_rate_rad_s[2] = 0.0f;
+    /* the body rates follow from the Euler rates at the same attitude */
+    fc_euler_rate_to_ang_vel(s->euler_rad, s->euler_rate_rad_s, s->ang_vel_frd_rad_s);
+}
+
 /* One angle axis: shaped, or (no time constant and no acceleration limit)
  * straight through with no rate. */
 static void shape_axis(fc_shaper_t *s, const fc_shaper_config_t *cfg, int axis, float cmd_rad,

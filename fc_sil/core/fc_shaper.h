@@ -74,5 +74,7 @@ void fc_shaper_update(fc_shaper_t *s, const fc_shaper_config_t *cfg, float roll_
                       bool hold_yaw, float dt_s);
 /* Keep the yaw target on a heading (rate mode follows the vehicle's own). */
 void fc_shaper_set_yaw(fc_shaper_t *s, float yaw_rad);
+/* The same, and the yaw target at rest (ArduCopter reset_yaw_target_and_rate). */
+void fc_shaper_reset_yaw(fc_shaper_t *s, float yaw_rad);
 
 #endif /* FC_SHAPER_H */
