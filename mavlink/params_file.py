@@ -14,9 +14,9 @@ from __future__ import annotations
 import math
 import os
 import struct
-import tempfile
 from typing import Iterable
 
+from .atomic_file import write_text_atomic
 from .errors import ParamFileError
 from .param_types import INT_TYPES, coerce
 from .vehicle_api import ParamStore
@@ -81,26 +81,8 @@ def format_parm(entries: Iterable[tuple[str, float, int]]) -> str:
 
 def save_parm(path: str | os.PathLike, entries: Iterable[tuple[str, float, int]]) -> None:
     """Atomically write (name, value, MAV_PARAM_TYPE) entries to path."""
-    path = os.fspath(path)
-    text = format_parm(entries)
-    folder = os.path.dirname(os.path.abspath(path))
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=".parm-", suffix=".tmp", dir=folder)
-    except OSError as exc:
-        raise ParamFileError(f"cannot write parameter file {path!r}: {exc.strerror or exc}; "
-                             f"check that the folder exists and is writable") from None
-    try:
-        with os.fdopen(fd, "w", encoding="ascii") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    write_text_atomic(path, format_parm(entries), encoding="ascii", error_cls=ParamFileError,
+                      what="parameter file")
 
 
 def store_entries(store: ParamStore) -> list[tuple[str, float, int]]:

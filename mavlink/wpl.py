@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 
+from .atomic_file import write_text_atomic
 from .errors import MissionFileError
 from .mission_store import GLOBAL_FRAMES
 from .vehicle_api import MissionItem
@@ -84,23 +84,5 @@ def load_wpl(path: str | os.PathLike) -> list[MissionItem]:
 
 def save_wpl(path: str | os.PathLike, items: list[MissionItem] | tuple[MissionItem, ...]) -> None:
     """Atomic write (temporary file in the same folder, then rename)."""
-    path = os.fspath(path)
-    text = format_wpl(items)
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=".wpl-", suffix=".tmp",
-                                   dir=os.path.dirname(os.path.abspath(path)))
-    except OSError as exc:
-        raise MissionFileError(f"cannot write mission file {path!r}: {exc.strerror or exc}") \
-            from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    write_text_atomic(path, format_wpl(items), encoding="utf-8", error_cls=MissionFileError,
+                      what="mission file")

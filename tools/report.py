@@ -33,6 +33,24 @@ def _quat_to_roll_pitch(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return roll, pitch
 
 
+def _save_trace(plt, out_dir: Path, fname: str, t, series, *, ylabel: str, title: str,
+                span=None, span_label: str = "", legend_cols: int = 1) -> str:
+    """One time-series figure: series = [(values, label or None), ...]."""
+    fig, ax = plt.subplots(figsize=(8, 3))
+    for values, label in series:
+        ax.plot(t, values, lw=0.5, label=label)
+    if span is not None:
+        ax.axvspan(*span, color="tab:green", alpha=0.08, label=span_label)
+    ax.set_xlabel("sim time [s]")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(loc="upper right", ncol=legend_cols, fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out_dir / fname, dpi=110)
+    plt.close(fig)
+    return fname
+
+
 def trace_plots(log, name: str, out_dir: Path, windows) -> list[str]:
     """Attitude error, PWM and yaw-rate traces of one run; returns file names."""
     plt = _plt()
@@ -41,56 +59,27 @@ def trace_plots(log, name: str, out_dir: Path, windows) -> list[str]:
     st = ch.get("/fc/status")
     gt = ch.get("/gt_att")
     if st is not None and gt is not None and len(st) and len(gt):
-        t = st["sim_ns"] / 1e9
         idx = np.clip(np.searchsorted(gt["sim_ns"], st["sim_ns"]), 0, len(gt) - 1)
-        q = np.stack([gt[f"q_wxyz_{i}"] for i in range(4)], axis=1)[idx] \
-            if "q_wxyz_0" in gt.dtype.names else gt["q_wxyz"][idx]
-        roll, pitch = _quat_to_roll_pitch(q)
-        tgt = st["att_target_rad"] if "att_target_rad" in st.dtype.names else \
-            np.stack([st[f"att_target_rad_{i}"] for i in range(3)], axis=1)
+        roll, pitch = _quat_to_roll_pitch(gt["q_wxyz"][idx])
+        tgt = st["att_target_rad"]
         err = np.degrees(np.hypot(roll - tgt[:, 0], pitch - tgt[:, 1]))
-        fig, ax = plt.subplots(figsize=(8, 3))
-        ax.plot(t, err, lw=0.6)
-        ax.axvspan(*windows[2], color="tab:green", alpha=0.08, label="analysis window")
-        ax.set_xlabel("sim time [s]")
-        ax.set_ylabel("attitude error [deg]")
-        ax.set_title(f"{name}: roll/pitch error vs command (run 0)")
-        ax.legend(loc="upper right")
-        fig.tight_layout()
-        files.append(f"{name}_attitude_error.png")
-        fig.savefig(out_dir / files[-1], dpi=110)
-        plt.close(fig)
+        files.append(_save_trace(
+            plt, out_dir, f"{name}_attitude_error.png", st["sim_ns"] / 1e9, [(err, None)],
+            ylabel="attitude error [deg]", span=windows[2], span_label="analysis window",
+            title=f"{name}: roll/pitch error vs commanded (shaped) target, run 0"))
     pwm = ch.get("/pwm")
     if pwm is not None and len(pwm):
-        t = pwm["sim_ns"] / 1e9
-        us = pwm["pwm_us"] if "pwm_us" in pwm.dtype.names else \
-            np.stack([pwm[f"pwm_us_{i}"] for i in range(4)], axis=1)
-        fig, ax = plt.subplots(figsize=(8, 3))
-        for m in range(4):
-            ax.plot(t, us[:, m], lw=0.5, label=f"motor {m + 1}")
-        ax.set_xlabel("sim time [s]")
-        ax.set_ylabel("PWM [us]")
-        ax.set_title(f"{name}: motor PWM (run 0)")
-        ax.legend(loc="upper right", ncol=4, fontsize=7)
-        fig.tight_layout()
-        files.append(f"{name}_pwm.png")
-        fig.savefig(out_dir / files[-1], dpi=110)
-        plt.close(fig)
+        us = pwm["pwm_us"]
+        files.append(_save_trace(
+            plt, out_dir, f"{name}_pwm.png", pwm["sim_ns"] / 1e9,
+            [(us[:, m], f"motor {m + 1}") for m in range(4)], ylabel="PWM [us]",
+            title=f"{name}: motor PWM, run 0", legend_cols=4))
     if gt is not None and len(gt):
-        t = gt["sim_ns"] / 1e9
-        r = gt["rates_frd_rad_s"][:, 2] if "rates_frd_rad_s" in gt.dtype.names else \
-            gt["rates_frd_rad_s_2"]
-        fig, ax = plt.subplots(figsize=(8, 3))
-        ax.plot(t, r, lw=0.5)
-        ax.axvspan(*windows[3], color="tab:orange", alpha=0.1, label="yaw window")
-        ax.set_xlabel("sim time [s]")
-        ax.set_ylabel("yaw rate [rad/s]")
-        ax.set_title(f"{name}: true body yaw rate (run 0)")
-        ax.legend(loc="upper right")
-        fig.tight_layout()
-        files.append(f"{name}_yaw_rate.png")
-        fig.savefig(out_dir / files[-1], dpi=110)
-        plt.close(fig)
+        files.append(_save_trace(
+            plt, out_dir, f"{name}_yaw_rate.png", gt["sim_ns"] / 1e9,
+            [(gt["rates_frd_rad_s"][:, 2], None)], ylabel="yaw rate [rad/s]",
+            span=windows[3], span_label="yaw window",
+            title=f"{name}: true body yaw rate, run 0"))
     return files
 
 
