@@ -161,7 +161,6 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
     # The rate checks need a window long on the wall clock too: at --speed 8 one sim
     # second is 125 ms of wall time, where a single scheduler hiccup moves a rate by 5 %.
     window_s = cfg.check_window_s if cfg.lockstep else cfg.check_window_s * max(1.0, cfg.speed)
-    window_s = min(window_s, cfg.duration_s)
     check_step = max(1, int(round(window_s * _NS / sim.dt_ns)))
     watch_every = max(1, int(0.02 * _NS / sim.dt_ns))       # ~20 ms of sim time
     pacer = None if cfg.lockstep else Pacer(sim.dt_ns, cfg.speed)
