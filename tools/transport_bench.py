@@ -39,7 +39,7 @@ VARIANTS = {
 }
 DEFAULT_TRANSPORTS = ("shm", "udp", "tcp", "tcp-nofastcrc")
 DEFAULT_IMU_MAX_HZ = 2_000_000
-DEFAULT_DURATION_S = 1.5
+DEFAULT_DURATION_S = 1.0
 
 
 class TransportBenchError(Exception):
