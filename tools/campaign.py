@@ -35,6 +35,9 @@ class RunSpec:
     variant: str = "full"         # ablation label
     keep_log: bool = True         # False: delete the log once its metrics are computed
     windows: tuple = ((0.0, 10.0), (10.0, 30.0), (30.0, 120.0), (90.0, 120.0))
+    fc: str = "ours"              # ours | ardupilot (ArduCopter SITL over the JSON interface)
+    sitl: str | None = None       # fc == ardupilot: the arducopter binary
+    sitl_speedup: float = 50.0    # fc == ardupilot: SITL --speedup
 
 
 @dataclass
@@ -48,7 +51,8 @@ class RunResult:
 
 def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_seed: int = 1,
                imu_hz=None, params=(), features_off=(), variant="full", windows=None,
-               keep_logs: str = "all"):
+               keep_logs: str = "all", fc: str = "ours", sitl: str | None = None,
+               sitl_speedup: float = 50.0):
     """One RunSpec per (scenario, run). keep_logs: all | first (run 0 of each
     scenario, enough for the report's traces) | none. A 120 s log is ~45 MB."""
     if keep_logs not in ("all", "first", "none"):
@@ -61,7 +65,8 @@ def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_s
             specs.append(RunSpec(scenario=sc, run_index=i, seed=base_seed + i,
                                  duration_s=duration_s, log_path=str(log), imu_hz=imu_hz,
                                  params=tuple(params), features_off=tuple(features_off),
-                                 variant=variant,
+                                 variant=variant, fc=fc, sitl=sitl,
+                                 sitl_speedup=sitl_speedup,
                                  windows=windows or RunSpec.windows,
                                  keep_log=keep_logs == "all" or (keep_logs == "first"
                                                                  and i == 0)))
@@ -71,18 +76,31 @@ def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_s
 def run_one(spec: RunSpec) -> RunResult:
     """Fly one run in this process, log it, and compute its metrics from the log."""
     from .flight import FlightOptions, fly_one_process
-    from .integrity import check_log
-    from .mcap_log import read_log
-    from .metrics import Windows, compute_metrics
 
     Path(spec.log_path).parent.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    if spec.fc == "ardupilot":
+        from .ardupilot_flight import fly_ardupilot
+        summary = fly_ardupilot(scenario=spec.scenario, seed=spec.seed,
+                                duration_s=spec.duration_s, log_path=spec.log_path,
+                                binary=spec.sitl, imu_hz=spec.imu_hz, params=dict(spec.params),
+                                speedup=spec.sitl_speedup)
+        return _result_from_log(spec, summary, t0)
     opts = FlightOptions(scenario=spec.scenario, duration_s=spec.duration_s, lockstep=True,
                          processes=1, imu_hz=spec.imu_hz, seed=spec.seed,
                          instance=f"bench-{os.getpid()}-{spec.variant}-{spec.run_index}",
                          log_path=spec.log_path, params=dict(spec.params),
                          features_off=spec.features_off)
-    t0 = time.perf_counter()
     summary = fly_one_process(opts, out=lambda s: None)
+    return _result_from_log(spec, summary, t0)
+
+
+def _result_from_log(spec: RunSpec, summary: dict, t0: float) -> RunResult:
+    """Integrity check and metrics of a run's log (the same for every FC)."""
+    from .integrity import check_log
+    from .mcap_log import read_log
+    from .metrics import Windows, compute_metrics
+
     log = read_log(spec.log_path)
     problems = check_log(log)
     w = spec.windows

@@ -10,7 +10,7 @@ from pathlib import Path
 from .campaign import CampaignError, make_specs, run_campaign
 from .flight_args import parse_params
 from .report import write_report
-from .table1 import aggregate, markdown
+from .table1 import aggregate, markdown, scenario_key
 
 HELP = "run the paper's benchmark campaign (S1..S4, N runs) and print Table 1"
 
@@ -46,6 +46,26 @@ def add_campaign_arguments(p) -> None:
 
 def add_arguments(p) -> None:
     add_campaign_arguments(p)
+    p.add_argument("--fc", default="ours", metavar="ours|ardupilot|ours,ardupilot",
+                   help="flight controller(s): our SIL FC (default), ArduCopter SITL over its "
+                        "JSON interface, or both side by side in one Table 1")
+    p.add_argument("--sitl", default=None, metavar="PATH",
+                   help="--fc ardupilot: the arducopter binary (default: $SILBRIDGE_ARDUCOPTER, "
+                        "then `arducopter` on PATH)")
+    p.add_argument("--sitl-speedup", type=float, default=50.0, metavar="X",
+                   help="--fc ardupilot: SITL --speedup (lockstep either way; higher only lets "
+                        "SITL run ahead of the wall clock, default 50)")
+
+
+FC_LABELS = {"ours": "silbridge", "ardupilot": "ArduCopter"}
+
+
+def fc_choice(text: str) -> list[str]:
+    fcs = [f.strip().lower() for f in text.split(",") if f.strip()]
+    bad = [f for f in fcs if f not in ("ours", "ardupilot")]
+    if not fcs or bad:
+        raise CampaignError(f"--fc wants ours, ardupilot or ours,ardupilot, not {text!r}")
+    return list(dict.fromkeys(fcs))
 
 
 def campaign_inputs(args):
@@ -64,16 +84,38 @@ def campaign_inputs(args):
 
 def run(args) -> int:
     scenarios, windows, params = campaign_inputs(args)
+    fcs = fc_choice(args.fc)
+    sitl = None
+    if "ardupilot" in fcs:
+        from .sitl_ardupilot import HOW_TO_GET, find_arducopter
+        sitl = find_arducopter(args.sitl)
+        if sitl is None:
+            fcs.remove("ardupilot")
+            note = f"bench --fc ardupilot skipped: {HOW_TO_GET}"
+            print(note, file=sys.stderr)
+            if not fcs:
+                if args.json:
+                    print(json.dumps({"skipped": True, "fc": "ardupilot", "reason": note}))
+                return 0
     out_dir = Path(args.out)
-    specs = make_specs(scenarios, args.runs, args.duration, out_dir, base_seed=args.seed,
-                       imu_hz=args.imu_hz, params=params, windows=windows,
-                       keep_logs=args.keep_logs)
+    specs = []
+    for fc in fcs:
+        # ArduCopter's parameters are its own: our FC's --param overrides go to ours only.
+        specs += make_specs(scenarios, args.runs, args.duration, out_dir, base_seed=args.seed,
+                            imu_hz=args.imu_hz, params=params if fc == "ours" else (),
+                            windows=windows, keep_logs=args.keep_logs, fc=fc, sitl=sitl,
+                            sitl_speedup=args.sitl_speedup,
+                            variant="full" if fc == "ours" else "ardupilot")
     t0 = time.monotonic()
     results = run_campaign(specs, jobs=args.jobs, executor=args.executor,
                            ray_address=args.ray_address)
     wall_s = time.monotonic() - t0
-    table = aggregate(results)
-    table.update({"runs": args.runs, "duration_s": args.duration, "wall_s": wall_s,
+    if fcs == ["ours"]:
+        table = aggregate(results)
+    else:   # one row group per (scenario, controller): both controllers in one Table 1
+        table = aggregate(results, group=lambda r: f"{scenario_key(r.spec.scenario)} "
+                                                   f"{FC_LABELS[r.spec.fc]}")
+    table.update({"runs": args.runs, "duration_s": args.duration, "wall_s": wall_s, "fc": fcs,
                   "executor": args.executor, "params": dict(params),
                   "sim_s_total": sum(r.summary.get("sim_s", 0.0) for r in results)})
     md = markdown(table)

@@ -16,9 +16,17 @@ HELP = "the simulator program: JSBSim + sensors, publishes to the SIL FC over sh
 
 def add_arguments(p) -> None:
     add_flight_arguments(p, processes=False)
+    p.add_argument("--fc", choices=("ours", "ardupilot"), default="ours",
+                   help="the flight controller: our SIL FC over the segment (default), or "
+                        "ArduPilot SITL (`arducopter --model JSON`) over its JSON interface")
+    p.add_argument("--sitl-address", default=None, metavar="HOST:PORT",
+                   help="--fc ardupilot: where SITL sends servo packets (default "
+                        "127.0.0.1:9002, SITL instance 0; instance N uses 9002 + 10 N)")
 
 
 def run(args) -> int:
+    if args.fc == "ardupilot":
+        return _run_ardupilot(args)
     opts = options_from_args(args)
     opts.instance = opts.instance or "silbridge"
     out = (lambda s: print(s, file=sys.stderr)) if args.json else print
@@ -40,4 +48,31 @@ def run(args) -> int:
     else:
         from .flight import print_summary
         print_summary(summary)
+    return 1 if summary["crashed"] else 0
+
+
+def _run_ardupilot(args) -> int:
+    """Our physics as ArduPilot SITL's JSON backend (lockstep: SITL sets the pace)."""
+    from .ardupilot_flight import serve_bridge
+
+    opts = options_from_args(args)
+    ignored = [flag for flag, given in (
+        ("--realtime/--speed (SITL paces the JSON link: its --speedup)", not opts.lockstep),
+        ("--transport/--hil-addr", opts.transport != "shm"),
+        ("--param/--feature-off (ArduCopter keeps its own parameters)",
+         bool(opts.params or opts.features_off))) if given]
+    for flag in ignored:
+        print(f"bridge: {flag} ignored with --fc ardupilot", file=sys.stderr)
+    out = (lambda s: print(s, file=sys.stderr)) if args.json else print
+    summary = serve_bridge(opts.scenario, seed=opts.seed, imu_hz=opts.imu_hz,
+                           duration_s=opts.duration_s, sitl_address=args.sitl_address, out=out)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        link = summary["json_link"]
+        out(f"ArduPilot SITL: {summary['sim_s']:.2f} s simulated in "
+            f"{summary['wall_s']:.2f} s wall; "
+            f"{link['packets']} servo packets, {link['duplicates']} resent, "
+            f"{link['dropped_frames']} lost, {link['resets']} SITL restarts; "
+            f"crashed {summary['crashed']}")
     return 1 if summary["crashed"] else 0

@@ -1,0 +1,148 @@
+"""The Simulator as ArduPilot SITL's JSON physics: one servo packet -> one step -> one reply.
+
+No sockets here (bridge/ardupilot_server.py owns the UDP port), so tests can
+drive the lockstep rules directly:
+
+- a new frame_count: hold the four motor PWMs for one physics step
+  (Simulator.dt_ns, 1 ms) and answer with the state after it. SITL advances
+  its clock by the difference of our timestamps, so its clock is ours
+  whatever its SIM_RATE_HZ; we pass SIM_RATE_HZ 1000 (tools/sitl_ardupilot.py)
+  so its scheduler also expects 1 kHz frames, and say so once if a packet
+  announces another rate.
+- the same frame_count again: SITL resent its servos after a 1 s wait for a
+  reply that was lost; answer again with the last state, no step (a step
+  would make the two clocks disagree).
+- a frame_count that jumps ahead: packets were lost; counted, one step.
+- a frame_count that goes back: SITL restarted; the physics restarts too
+  (a fresh Simulator from the same scenario and seed), and its timestamp going
+  back tells SITL to treat it as a physics reset.
+
+IMU values are the sensor model's (the mean of the step's IMU samples, so an
+oversampled IMU is decimated by a boxcar as an IMU FIFO read would be): bias,
+noise, vibration and temperature drift of the scenario reach ArduCopter just as
+they reach our FC, so Table 1 compares the controllers under the same sensors.
+Keep SITL's own SIM_ACC*/SIM_GYR* noise at 0 so it is not added twice.
+Position, velocity and attitude are truth: SITL builds its GPS, baro and
+compass from them with its own models (our baro/mag/GNSS records are not sent).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from silbridge.shm.records import GT_ATT_DTYPE, GT_NAV_DTYPE, IMU_DTYPE, PWM_DTYPE, Kind
+
+from . import ardupilot_json as apj
+
+_NS = 1_000_000_000
+
+
+def euler_from_quat(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:
+    """ZYX Euler (roll, pitch, yaw) [rad] of a body FRD -> NED quaternion; yaw in [-pi, pi]."""
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return roll, pitch, yaw
+
+
+class ArduPilotPhysics:
+    """Protocol state around a Simulator.
+
+    make_sim: () -> Simulator, called at start and at every SITL restart.
+    sink: optional object with step(records, pwm_record, sim) (the run log).
+    """
+
+    def __init__(self, make_sim, sink=None, note=None):
+        self._make_sim = make_sim
+        self.sim = make_sim()
+        self.sink = sink
+        self._note = note or (lambda text: None)
+        self.last_frame: int | None = None
+        self.last_reply: bytes | None = None
+        self.packets = 0
+        self.steps = 0
+        self.duplicates = 0
+        self.dropped_frames = 0
+        self.resets = 0
+        self.sitl_rate_hz: int | None = None
+        self.channels: int | None = None
+        self._pwm = np.zeros(1, dtype=PWM_DTYPE)
+        self._pwm["kind"] = Kind.PWM
+        self._pwm["channel_count"] = apj.MOTORS
+
+    @property
+    def physics_hz(self) -> float:
+        return _NS / self.sim.dt_ns
+
+    def handle(self, data: bytes, source=None) -> bytes:
+        """One datagram -> the reply to send back to its source."""
+        pkt = apj.decode_servo_packet(data, source)
+        self.packets += 1
+        if self.sitl_rate_hz != pkt.frame_rate_hz:
+            self.sitl_rate_hz = pkt.frame_rate_hz
+            if pkt.frame_rate_hz and abs(pkt.frame_rate_hz - self.physics_hz) > 0.5:
+                self._note(f"SITL runs its physics frames at {pkt.frame_rate_hz} Hz, ours at "
+                           f"{self.physics_hz:g} Hz: SITL's clock follows our timestamps "
+                           f"(1 step per packet); set SIM_RATE_HZ {self.physics_hz:g} so its "
+                           "scheduler expects that rate")
+        self.channels = pkt.channels
+        frame = pkt.frame_count
+        last = self.last_frame
+        if last is not None and frame == last and self.last_reply is not None:
+            self.duplicates += 1
+            return self.last_reply
+        if last is not None and frame < last:
+            self._restart(frame, last)
+        elif last is not None and frame > last + 1:
+            self.dropped_frames += frame - last - 1
+        self.last_frame = frame
+        self.last_reply = self._step(pkt)
+        return self.last_reply
+
+    def _restart(self, frame: int, last: int) -> None:
+        self.resets += 1
+        self._note(f"SITL frame count went back ({last} -> {frame}): SITL restarted; "
+                   "physics restarted from the scenario's initial state")
+        self.sim = self._make_sim()
+
+    def _step(self, pkt: apj.ServoPacket) -> bytes:
+        sim = self.sim
+        motors = apj.motor_pwm_us(pkt)
+        applied_ns = sim.sim_ns
+        recs = sim.step(motors)
+        self.steps += 1
+        kinds = recs["kind"]
+        imu = recs[kinds == Kind.IMU].view(IMU_DTYPE)
+        att = recs[kinds == Kind.GT_ATT].view(GT_ATT_DTYPE)[-1]
+        nav = recs[kinds == Kind.GT_NAV].view(GT_NAV_DTYPE)[-1]
+        if len(imu):
+            accel = imu["accel_frd_m_s2"].astype(np.float64).mean(axis=0)
+            gyro = imu["gyro_frd_rad_s"].astype(np.float64).mean(axis=0)
+        else:   # an IMU slower than the physics: truth this step (its sample comes later)
+            accel = att["specific_force_frd_m_s2"].astype(np.float64)
+            gyro = att["rates_frd_rad_s"].astype(np.float64)
+        q = [float(v) for v in att["q_wxyz"]]
+        reply = apj.encode_state(sim.sim_ns / _NS, gyro.tolist(), accel.tolist(),
+                                 nav["pos_ned_m"].tolist(),
+                                 nav["vel_ned_m_s"].astype(np.float64).tolist(),
+                                 q, euler_from_quat(*q))
+        if self.sink is not None:
+            p = self._pwm
+            p["seq"] = self.steps - 1
+            p["sim_ns"] = applied_ns
+            p["wall_ns"] = time.monotonic_ns()
+            p["pwm_us"][0, :apj.MOTORS] = motors
+            p["armed"] = 1 if max(motors) > apj.PWM_MIN_US else 0
+            p["fc_step_seq"] = pkt.frame_count & 0xFFFFFFFF
+            p["imu_sim_ns"] = applied_ns
+            self.sink.step(recs, p, sim)
+        return reply
+
+    def stats(self) -> dict:
+        return {"packets": self.packets, "steps": self.steps, "duplicates": self.duplicates,
+                "dropped_frames": self.dropped_frames, "resets": self.resets,
+                "sitl_rate_hz": self.sitl_rate_hz, "channels": self.channels,
+                "physics_hz": self.physics_hz}

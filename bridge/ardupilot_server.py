@@ -1,0 +1,117 @@
+"""The UDP side of the ArduPilot JSON physics: bind SITL's port, answer every packet.
+
+    server = JsonPhysicsServer(physics, ("127.0.0.1", 9002))
+    result = server.serve(duration_s=120.0)
+
+SITL is the clock master in lockstep: it sends a servo packet, blocks until
+our reply, and only then runs its next frame, so `serve` simply answers
+packets until the sim time reaches duration_s (or the vehicle crashes, or
+`stop()` says so). The first packet may take long (the user starts SITL
+after us; SITL boots), later silence means SITL died or hung: both have
+their own timeout and raise a user-facing error saying what to check.
+"""
+
+from __future__ import annotations
+
+import socket
+import time
+from dataclasses import dataclass, field
+
+from .ardupilot_json import ArduPilotProtocolError
+from .runner_errors import BridgeError
+
+_NS = 1_000_000_000
+
+
+class SitlLost(BridgeError):
+    """SITL never connected, or stopped sending servo packets."""
+
+
+@dataclass
+class JsonRunResult:
+    sim_s: float
+    wall_s: float
+    stats: dict
+    crashed: bool
+    crash_reason: str = ""
+    stopped_by: str = "duration"
+    notes: list = field(default_factory=list)
+
+
+def parse_address(text: str | None, default_port: int) -> tuple[str, int]:
+    """'HOST:PORT', 'HOST', ':PORT' or None -> (host, port)."""
+    if not text:
+        return "127.0.0.1", default_port
+    host, sep, port = text.rpartition(":")
+    if not sep:
+        return text, default_port
+    try:
+        return host or "127.0.0.1", int(port)
+    except ValueError:
+        raise ArduPilotProtocolError(f"--sitl-address wants HOST:PORT, got {text!r}") from None
+
+
+class JsonPhysicsServer:
+    def __init__(self, physics, address=("127.0.0.1", 9002)):
+        self.physics = physics
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            self.sock.bind(address)
+        except OSError as e:
+            self.sock.close()
+            raise BridgeError(f"cannot listen for ArduPilot SITL on {address[0]}:{address[1]} "
+                              f"({e.strerror}): another bridge or physics program uses it; "
+                              "stop it or pick another --sitl-address / SITL --instance") from None
+        self.address = self.sock.getsockname()
+
+    def close(self) -> None:
+        self.sock.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def serve(self, duration_s: float, *, connect_timeout_s: float = 120.0,
+              idle_timeout_s: float = 10.0, stop=None, poll_s: float = 0.2) -> JsonRunResult:
+        """Answer servo packets until duration_s of sim time; see the module text."""
+        phys = self.physics
+        sock = self.sock
+        sock.settimeout(poll_s)
+        end_ns = int(round(duration_s * _NS))
+        t0 = time.monotonic()
+        last_rx = None
+        stopped_by = "duration"
+        while phys.sim.sim_ns < end_ns:
+            try:
+                data, src = sock.recvfrom(512)
+            except socket.timeout:
+                now = time.monotonic()
+                if stop is not None and stop():
+                    stopped_by = "stop"
+                    break
+                if last_rx is None and now - t0 > connect_timeout_s:
+                    raise SitlLost(
+                        f"no servo packet from ArduPilot SITL on {self.address[0]}:"
+                        f"{self.address[1]} in {connect_timeout_s:g} s: start `arducopter "
+                        "--model JSON` (its instance N sends to port 9002 + 10 N)") from None
+                if last_rx is not None and now - last_rx > idle_timeout_s:
+                    raise SitlLost(
+                        f"ArduPilot SITL stopped sending servo packets for {idle_timeout_s:g} "
+                        f"s at sim time {phys.sim.sim_ns / _NS:.3f} s: did it crash or was it "
+                        "stopped? Check its console output") from None
+                continue
+            last_rx = time.monotonic()
+            sock.sendto(phys.handle(data, src), src)
+            if phys.sim.crashed:
+                stopped_by = "crash"
+                break
+            if stop is not None and stop():
+                stopped_by = "stop"
+                break
+        wall_s = time.monotonic() - t0
+        sim = phys.sim
+        return JsonRunResult(sim_s=sim.sim_ns / _NS, wall_s=wall_s, stats=phys.stats(),
+                             crashed=bool(sim.crashed), crash_reason=sim.crash_reason,
+                             stopped_by=stopped_by)
