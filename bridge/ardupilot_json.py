@@ -26,7 +26,6 @@ CW: the Simulator's order, so pwm[0:4] go to the Simulator unchanged.
 
 from __future__ import annotations
 
-import json
 import math
 import struct
 
@@ -119,27 +118,24 @@ def motor_pwm_us(packet: ServoPacket) -> tuple:
     return tuple(out)
 
 
-def _num(x: float) -> float:
-    # NaN or inf would be read by atof as 0 or garbage: never let it through silently.
-    if not math.isfinite(x):
-        raise ArduPilotProtocolError(f"non-finite value {x} in the physics state: the "
-                                     "simulation diverged; stop and check the scenario")
-    return float(x)
+# The reply, keys in SITL's table order, no space after any colon (SITL reads the value
+# at colon + 1). Filled with repr() of Python floats: the shortest text that reads back
+# exactly, and valid JSON for finite values (a json.dumps per packet costs 3x more).
+_STATE_FMT = ('\n{{"timestamp":{},"imu":{{"gyro":[{},{},{}],"accel_body":[{},{},{}]}},'
+              '"position":[{},{},{}],"attitude":[{},{},{}],"quaternion":[{},{},{},{}],'
+              '"velocity":[{},{},{}]}}\n')
 
 
 def encode_state(timestamp_s: float, gyro_frd_rad_s, accel_frd_m_s2, pos_ned_m, vel_ned_m_s,
                  q_wxyz, euler_rad) -> bytes:
-    """The reply line: newline, one compact JSON object, newline.
-
-    Keys in SITL's table order; `separators` leaves no space after the colon
-    (SITL reads the value at colon + 1)."""
-    obj = {
-        "timestamp": _num(timestamp_s),
-        "imu": {"gyro": [_num(v) for v in gyro_frd_rad_s],
-                "accel_body": [_num(v) for v in accel_frd_m_s2]},
-        "position": [_num(v) for v in pos_ned_m],
-        "attitude": [_num(v) for v in euler_rad],
-        "quaternion": [_num(v) for v in q_wxyz],
-        "velocity": [_num(v) for v in vel_ned_m_s],
-    }
-    return b"\n" + json.dumps(obj, separators=(",", ":")).encode() + b"\n"
+    """The reply line: newline, one compact JSON object, newline."""
+    values = (float(timestamp_s), *map(float, gyro_frd_rad_s), *map(float, accel_frd_m_s2),
+              *map(float, pos_ned_m), *map(float, euler_rad), *map(float, q_wxyz),
+              *map(float, vel_ned_m_s))
+    if len(values) != 20:
+        raise ValueError(f"encode_state wants 20 numbers, got {len(values)}")
+    # NaN or inf would be read by SITL's atof as 0 or garbage: never send one.
+    if not math.isfinite(sum(values)):
+        raise ArduPilotProtocolError(f"non-finite value in the physics state {values}: the "
+                                     "simulation diverged; stop and check the scenario")
+    return _STATE_FMT.format(*map(repr, values)).encode()

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from silbridge.shm import lockstep as ls
-from silbridge.shm.records import FLAG_STEP_END, PWM_DTYPE, RECORD_DTYPE
+from silbridge.shm.records import PWM_DTYPE, RECORD_DTYPE
 
 from .runner_errors import PeerLost
 
@@ -29,18 +29,13 @@ _NS = 1_000_000_000
 
 @dataclass
 class LoopStats:
-    """What the bridge measured; tools/ turns it into the run summary."""
+    """The PWM the bridge received: counts and first/last stamps, for the rates."""
 
-    steps: int = 0
-    sim_ns: int = 0
-    wall_ns: int = 0
     pwm_received: int = 0
     pwm_first_sim_ns: int = -1
     pwm_last_sim_ns: int = -1
     pwm_first_wall_ns: int = -1
     pwm_last_wall_ns: int = -1
-    late_steps: int = 0
-    max_late_ns: int = 0
 
 
 class BridgeLoop:
@@ -49,11 +44,9 @@ class BridgeLoop:
     # Sample truth for the summary errors every this many physics steps.
     ERROR_SAMPLE_STEPS = 10
 
-    def __init__(self, sim, segment, *, lockstep: bool, sink=None, settle_s: float = 10.0,
-                 trace: bool = True):
+    def __init__(self, sim, segment, *, sink=None, settle_s: float = 10.0, trace: bool = True):
         self.sim = sim
         self.seg = segment
-        self.lockstep = lockstep
         self.sink = sink
         self.pwm_us = (1000.0, 1000.0, 1000.0, 1000.0)   # a tuple: cheapest to unpack per step
         self.armed = False
@@ -144,14 +137,6 @@ class BridgeLoop:
         return self._hash.hexdigest() if self._trace else ""
 
 
-def step_end_sim_ns(recs: np.ndarray) -> int:
-    """sim time of the last STEP_END record in a batch, or -1."""
-    ends = np.flatnonzero(recs["flags"] & FLAG_STEP_END)
-    if len(ends) == 0:
-        return -1
-    return int(recs["sim_ns"][ends[-1]])
-
-
 class PeerWatch:
     """Detects a dead or stalled FC within ~100 ms while the bridge waits."""
 
@@ -178,11 +163,3 @@ class PeerWatch:
             raise PeerLost(f"the FC stopped beating for {(now - self._last_change) / 1e9:.1f} s "
                            "(hung or stopped?); the bridge stops")
 
-
-def wait_fc(loop: BridgeLoop, watch: PeerWatch, slice_s: float = 0.02) -> None:
-    """Lockstep wait for the FC to answer the current step, checking it is alive."""
-    target = loop.sim.sim_ns
-    seg = loop.seg
-    while not seg.wait_word(ls.FC_SIM_NS, target, slice_s):
-        watch.check()
-    loop.collect_pwm()

@@ -145,7 +145,7 @@ def pwm_rate_hz(loop: BridgeLoop, cfg: BridgeRunConfig) -> float:
 def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None, sink=None,
                out=print) -> BridgeResult:
     """Run one flight; returns what the bridge measured. Raises a user-facing error on failure."""
-    loop = BridgeLoop(sim, seg, lockstep=cfg.lockstep, sink=sink, settle_s=cfg.settle_s,
+    loop = BridgeLoop(sim, seg, sink=sink, settle_s=cfg.settle_s,
                       trace=cfg.trace_hash)
     checks = [check_sim_step(sim)]
     out(checks[-1].line())
