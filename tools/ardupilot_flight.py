@@ -57,9 +57,11 @@ def serve_bridge(scenario: str, *, seed=None, imu_hz=None, duration_s=None,
     address = parse_address(sitl_address, sitl_port(0))
     with JsonPhysicsServer(phys, address) as server:
         host, port = server.address
+        n, off = divmod(port - 9002, 10)
+        inst = f" --instance {n}" if n >= 0 and off == 0 else ""
         out(f"bridge: ArduPilot JSON physics on udp {host}:{port}; start "
-            f"`arducopter --model JSON:{host} --instance {(port - 9002) // 10}` with "
-            f"SIM_RATE_HZ {phys.physics_hz:g}, FRAME_CLASS 1, FRAME_TYPE 1")
+            f"`arducopter --model JSON:{host}{inst}` with SIM_RATE_HZ {phys.physics_hz:g}, "
+            "FRAME_CLASS 1, FRAME_TYPE 1")
         res = server.serve(duration_s if duration_s is not None else sc.duration_s)
     return _summary(sc, phys.sim, res)
 

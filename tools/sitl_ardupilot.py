@@ -35,6 +35,8 @@ from collections import deque
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
+from silbridge.bridge.ardupilot_physics import euler_from_quat
+
 from .ardupilot_log import SOURCE_ATTITUDE_TARGET, SOURCE_NAV_CONTROLLER
 
 ENV_BINARY = "SILBRIDGE_ARDUCOPTER"
@@ -257,11 +259,7 @@ class MavlinkDriver(threading.Thread):
             self.armed = bool(m.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED)
             self.mode = m.custom_mode
         elif kind == "ATTITUDE_TARGET":
-            w, x, y, z = m.q
-            roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
-            pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
-            yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-            self.target.set(roll, pitch, yaw, SOURCE_ATTITUDE_TARGET)
+            self.target.set(*euler_from_quat(*m.q), SOURCE_ATTITUDE_TARGET)
         elif kind == "NAV_CONTROLLER_OUTPUT":
             self.target.set(math.radians(m.nav_roll), math.radians(m.nav_pitch),
                             math.radians(m.nav_bearing), SOURCE_NAV_CONTROLLER)

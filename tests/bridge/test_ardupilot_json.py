@@ -198,3 +198,14 @@ def test_silence_before_the_first_packet_says_how_to_start_sitl():
     with JsonPhysicsServer(phys, ("127.0.0.1", 0)) as server:
         with pytest.raises(SitlLost, match="arducopter --model JSON"):
             server.serve(1.0, connect_timeout_s=0.1, poll_s=0.02)
+
+
+@pytest.mark.parametrize("imu_hz", [4000, 500])
+def test_oversampled_and_slow_imu_still_give_one_reply_per_step(imu_hz):
+    """4 kHz: the step's four samples are averaged; 500 Hz: steps without a sample send truth."""
+    sc = load_scenario("S1")
+    phys = ArduPilotPhysics(lambda: Simulator(sc, imu_hz=imu_hz))
+    for k in range(1, 101):
+        st = sitl_read(phys.handle(apj.encode_servo_packet(k, [1000] * 4)).decode())
+        assert st["accel_body"][2] == pytest.approx(-9.81, abs=0.4)
+    assert st["timestamp"] == pytest.approx(0.1, abs=1e-12) and phys.steps == 100

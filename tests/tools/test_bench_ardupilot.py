@@ -3,8 +3,10 @@
 Always run: the skip path without a binary (exit 0, says how to get one), the
 `bridge --fc ardupilot` command against a fake SITL, the bridge-side log of an
 ArduCopter flight through the real integrity check and metrics, the SITL
-defaults, and the MAVLink driver (GUIDED, arm, take-off, commanded attitude)
-against a fake ArduCopter MAVLink port. With SILBRIDGE_ARDUCOPTER pointing at
+defaults, the MAVLink driver (GUIDED, arm, take-off, commanded attitude)
+against a fake ArduCopter MAVLink port, and whole bench runs with a stand-in
+`arducopter` executable (fake_arducopter.py: same command line, ports and
+protocols, a plain altitude hold). With SILBRIDGE_ARDUCOPTER pointing at
 an arducopter binary, an end-to-end run arms, takes off and hovers for 30 s of
 sim time on our physics.
 """
@@ -253,3 +255,46 @@ def test_arducopter_arms_takes_off_and_hovers_30_s(tmp_path):
     alt_m = -nav["pos_ned_m"][nav["sim_ns"] >= 20e9][:, 2]
     assert abs(alt_m.mean() - 10.0) < 1.0        # GUIDED holds the take-off altitude
     assert math.isfinite(r.metrics["att_rms_deg"]) and r.metrics["att_rms_deg"] < 5.0
+
+
+@pytest.fixture
+def fake_sitl_binary(tmp_path) -> str:
+    """An executable `arducopter` that is tests/tools/fake_arducopter.py."""
+    path = tmp_path / "arducopter"
+    script = Path(__file__).with_name("fake_arducopter.py")
+    path.write_text(f"#!/bin/sh\nexec {sys.executable} {script} \"$@\"\n")
+    path.chmod(0o755)
+    return str(path)
+
+
+def test_bench_run_with_a_stand_in_sitl_logs_from_take_off(tmp_path, fake_sitl_binary):
+    """run_one --fc ardupilot end to end: process, ports, MAVLink driving, log, metrics."""
+    from silbridge.tools.campaign import make_specs, run_one
+
+    spec = make_specs(["S1"], 1, 6.0, tmp_path, fc="ardupilot", sitl=fake_sitl_binary,
+                      variant="ardupilot",
+                      windows=((0.0, 2.0), (2.0, 3.0), (3.0, 6.0), (3.0, 6.0)))[0]
+    r = run_one(spec)
+    assert r.problems == []
+    assert r.summary["fc"] == "ardupilot" and not r.summary["crashed"]
+    assert r.summary["sim_s"] == pytest.approx(6.0, abs=0.002)
+    assert r.summary["takeoff_physics_s"] >= 3.0       # the stand-in refuses to arm before 3 s
+    log = read_log(spec.log_path)
+    assert log.channels["/pwm"]["sim_ns"][0] == 0      # the log's clock starts at take-off
+    up_m = -log.channels["/gt_nav"]["pos_ned_m"][:, 2]
+    assert up_m[0] < 0.2 and up_m.max() > 2.0           # it left the ground under our physics
+    assert math.isfinite(r.metrics["att_rms_deg"]) and math.isfinite(r.metrics["pwm_pp_us"])
+
+
+def test_bench_cli_puts_both_controllers_in_one_table(tmp_path, fake_sitl_binary):
+    p = subprocess.run(CLI + ["bench", "--fc", "ours,ardupilot", "--sitl", fake_sitl_binary,
+                              "--scenarios", "S1", "--runs", "1", "--duration", "4",
+                              "--jobs", "1", "--warmup", "0", "1", "--transient", "1", "2",
+                              "--analysis", "2", "4", "--yaw-window", "2", "4",
+                              "--no-report", "--out", str(tmp_path)],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    header = next(line for line in p.stdout.splitlines() if line.startswith("| metric"))
+    assert header.split(" | ")[1:4] == ["S1 ours", "S1 paper", "S1 ArduCopter |"]
+    table = json.loads((tmp_path / "table1.json").read_text())
+    assert set(table["scenarios"]) == {"S1", "S1 ArduCopter"} and table["fc"] == ["ours", "ardupilot"]
