@@ -138,3 +138,32 @@ def test_fly_log_is_complete_and_analyzable(tmp_path, processes):
                                      yaw=(10, 12)))
     assert 0 <= m["att_rms_deg"] < 5 and m["sat_pct"] == 0
     assert s["log"] == str(log_path)
+
+
+def test_fly_json_has_the_issue_keys():
+    out = subprocess.run([sys.executable, "-m", "silbridge.tools", "fly", "--processes", "1",
+                          "--duration", "3", "--json"], capture_output=True, text=True,
+                         check=True).stdout
+    import json
+    d = json.loads(out)
+    for key in ("sim_s", "wall_s", "realtime_factor", "rates_hz", "overwritten", "rejected",
+                "latency_us", "jitter_us", "attitude_rms_deg", "altitude_rms_m", "trace_hash",
+                "crashed"):
+        assert key in d, key
+    assert set(d["rates_hz"]) >= {"imu", "baro", "mag", "gnss", "pwm"}
+    assert set(d["latency_us"]) >= {"p50", "p99"} and set(d["jitter_us"]) >= {"p50", "p99"}
+    assert d["sim_s"] == pytest.approx(3.0)
+
+
+@pytest.mark.parametrize("body, names", [
+    ('name = "x"\nseed = 1\nduration_s = 5.0\nwarp = 9\n', "warp"),
+    ('name = "x"\nseed = 1\nduration_s = 5.0\n[imu]\nrate_hz = -1000\n', "rate_hz"),
+    ('name = "x"\nduration_s = 5.0\n', "seed"),
+])
+def test_fly_refuses_a_bad_scenario_naming_the_key(tmp_path, body, names):
+    path = tmp_path / "bad.toml"
+    path.write_text(body)
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools", "fly", "--processes", "1",
+                        "--scenario", str(path)], capture_output=True, text=True)
+    assert p.returncode == 2, p.stderr
+    assert names in p.stderr and "Traceback" not in p.stderr
