@@ -201,8 +201,13 @@ class Simulator:
         # Truth as HIL_STATE_QUATERNION carries it (whole mm down, whole cm/s), whatever the
         # transport: the FC blends truth altitude and climb, so it must read the same numbers
         # over shared memory and over MAVLink. Dynamics use JSBSim's own state, not these.
-        pd = _q_down(agl0 - hagl_m)
-        gvn, gve, gvd = _q_vel(vn), _q_vel(ve), _q_vel(vd)
+        # Inline fast path (same arithmetic as hil_quant, which handles NaN and the int16
+        # range); it saves ~1 us per step, a few per cent of the whole loop.
+        pd = agl0 - hagl_m
+        pd = round(pd * 1000.0) / 1000.0 if -1e6 < pd < 1e6 else _q_down(pd)
+        gvn = round(vn * 100.0) / 100.0 if -327.0 < vn < 327.0 else _q_vel(vn)
+        gve = round(ve * 100.0) / 100.0 if -327.0 < ve < 327.0 else _q_vel(ve)
+        gvd = round(vd * 100.0) / 100.0 if -327.0 < vd < 327.0 else _q_vel(vd)
 
         if self._scalar_imu:
             ax, ay, az, gx, gy, gz, temp_c = self.imu.step_scalar(fx, fy, fz, wx, wy, wz,

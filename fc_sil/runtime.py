@@ -110,15 +110,18 @@ class FcLoop:
         lat = self.latency_ns
         lat.buf[lat.n & lat.mask] = consume - newest_wall
         lat.n += 1
+        period = 0
         if self._prev_consume:
+            period = consume - self._prev_consume
             per = self.period_ns
-            per.buf[per.n & per.mask] = consume - self._prev_consume
+            per.buf[per.n & per.mask] = period
             per.n += 1
         self._prev_consume = consume
         self.polls += 1
         self.records += n
         if self.sink is not None:
-            self.sink.fc_batch(recs, pwm, status, consume, pwm_wall, newest_sim, newest_wall)
+            self.sink.fc_batch(recs, pwm, status,
+                               (newest_sim, newest_wall, consume, pwm_wall, period))
         if self.supervisor is not None:
             self.supervisor.after_batch(self, recs, pwm, status)
         return n

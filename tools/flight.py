@@ -184,7 +184,6 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
     summary = summarise(opts, sc, sim, res, fc_summary)
     if sink is not None:
         summary["log"] = opts.log_path
-        summary["log_cost_ns"] = sink.cost_ns
     return summary
 
 

@@ -77,7 +77,8 @@ class StreamCounter:
         self.last = {k: None for k in self.KINDS}
         self.pwm_walls: list = []
 
-    def fc_batch(self, recs, pwm, status, consume, pwm_wall, newest_sim, newest_wall) -> None:
+    def fc_batch(self, recs, pwm, status, timing) -> None:
+        pwm_wall = timing[3]
         kinds = recs["kind"]
         walls = recs["wall_ns"]
         for name, k in self.KINDS.items():
