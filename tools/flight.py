@@ -229,7 +229,7 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
-    fc_summary = _last_json(stdout)
+    fc_summary = last_json_line(stdout)
     summary = summarise(opts, sc, sim, res, fc_summary)
     if opts.log_path:
         os.unlink(f"{opts.log_path}.meta.json")
@@ -237,7 +237,8 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
     return summary
 
 
-def _last_json(text: str) -> dict:
+def last_json_line(text: str) -> dict:
+    """The last JSON object a `silbridge ... --json` child printed ({} if none)."""
     for line in reversed((text or "").strip().splitlines()):
         line = line.strip()
         if line.startswith("{"):

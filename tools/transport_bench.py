@@ -159,7 +159,7 @@ def run_step(transport: str, imu_hz: int, duration_s: float, fastcrc: bool) -> d
     from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
     from silbridge.shm import Segment
 
-    from .flight import FlightOptions, make_simulator
+    from .flight import FlightOptions, last_json_line, make_simulator
     from .transport_wiring import bridge_segment, fc_cli_args
 
     opts = FlightOptions(scenario="S1", duration_s=duration_s, lockstep=False, imu_hz=imu_hz,
@@ -190,7 +190,7 @@ def run_step(transport: str, imu_hz: int, duration_s: float, fastcrc: bool) -> d
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
-    fc = json.loads(stdout.strip().splitlines()[-1]) if stdout.strip() else {}
+    fc = last_json_line(stdout)
     written = res.ring["sensors"]["written"]
     received = fc.get("records", 0)
     overwritten = res.ring["sensors"]["overwritten"] + res.ring["sensors"]["rejected"]

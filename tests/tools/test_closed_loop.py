@@ -63,47 +63,28 @@ def _wait_running(bridge, timeout=20.0):
                          + bridge.stderr.read())
 
 
-def test_killed_fc_is_reported_by_the_bridge_within_a_second():
-    name = f"kill-fc-{os.getpid()}"
-    bridge = _spawn(["bridge", "--instance", name, "--realtime", "--duration", "60"])
-    fc = _spawn(["fc", "--instance", name])
+@pytest.mark.parametrize("victim, survivor, says", [("fc", "bridge", "FC"),
+                                                      ("bridge", "fc", "bridge")])
+def test_a_killed_peer_is_reported_within_a_second(victim, survivor, says):
+    name = f"kill-{victim}-{os.getpid()}"
+    procs = {"bridge": _spawn(["bridge", "--instance", name, "--realtime", "--duration", "60"]),
+             "fc": _spawn(["fc", "--instance", name])}
     try:
-        _wait_running(bridge)
+        _wait_running(procs["bridge"])
         t_kill = time.monotonic()
-        fc.send_signal(signal.SIGKILL)
-        bridge.wait(timeout=10)
+        procs[victim].send_signal(signal.SIGKILL)
+        procs[survivor].wait(timeout=10)
         elapsed = time.monotonic() - t_kill
-        err = bridge.stderr.read()
-        assert bridge.returncode == 2, err
-        assert "FC" in err
-        assert elapsed < 1.0 + 0.5, elapsed   # detection < 1 s, plus process exit
+        err = procs[survivor].stderr.read()
+        assert procs[survivor].returncode == 2, err
+        assert says in err
+        assert elapsed < 1.5, elapsed   # detection < 1 s, plus the survivor's exit
     finally:
-        for p in (bridge, fc):
+        for p in procs.values():
             if p.poll() is None:
                 p.kill()
                 p.wait()
-
-
-def test_killed_bridge_is_reported_by_the_fc_within_a_second():
-    name = f"kill-br-{os.getpid()}"
-    bridge = _spawn(["bridge", "--instance", name, "--realtime", "--duration", "60"])
-    fc = _spawn(["fc", "--instance", name])
-    try:
-        _wait_running(bridge)
-        t_kill = time.monotonic()
-        bridge.send_signal(signal.SIGKILL)
-        fc.wait(timeout=10)
-        elapsed = time.monotonic() - t_kill
-        err = fc.stderr.read()
-        assert fc.returncode == 2, err
-        assert "bridge" in err
-        assert elapsed < 1.5, elapsed
-    finally:
-        for p in (bridge, fc):
-            if p.poll() is None:
-                p.kill()
-                p.wait()
-        remove_stale(name)   # the killed bridge could not unlink its segment
+        remove_stale(name)   # a killed bridge cannot unlink its segment
 
 
 @pytest.mark.parametrize("imu_hz", [8000, 32000])
