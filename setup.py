@@ -50,7 +50,21 @@ if core_src:
         )
     )
 
-# SILBRIDGE_EXT=ring (or core) builds one extension only: handy while another
+step_src = sources("bridge/src/*.c")
+if step_src:
+    extensions.append(
+        Extension(
+            "silbridge.bridge._step",
+            step_src,
+            include_dirs=["bridge/src", "shm/include"],
+            depends=sources("bridge/src/*.h", "shm/include/*.h"),
+            # No FMA contraction: the kernel must give the Python reference's exact doubles.
+            extra_compile_args=CFLAGS + ["-ffp-contract=off"],
+            libraries=["m"],
+        )
+    )
+
+# SILBRIDGE_EXT=ring (or core, step) builds one extension only: handy while another
 # extension's sources are mid-edit (`SILBRIDGE_EXT=ring python setup.py build_ext --inplace`).
 only = os.environ.get("SILBRIDGE_EXT")
 if only:

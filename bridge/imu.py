@@ -77,13 +77,15 @@ def _even_step(frac) -> float:
 
 
 class ImuModel:
-    """State and maths of one IMU. The simulator calls `step_scalar` (one sample per
-    physics step, imu_hz == physics_hz) or `step_block` (any count), once per step."""
+    """State and maths of one IMU. With one sample per physics step (imu_hz ==
+    physics_hz) the simulator's step kernel samples from `next_scalar_block` rows and
+    `injected`; otherwise the simulator calls `step_block` (any count) once per step."""
 
     def __init__(self, cfg, seed: int, physics_hz: int, imu_hz: int, ambient_c: float,
                  omega_max_rad_s: float, block_rows: int = DEFAULT_BLOCK_ROWS):
         dt_s = 1.0 / physics_hz
         self.dt_s = dt_s
+        self.physics_hz = physics_hz
         self.imu_hz = imu_hz
         self.block_rows = block_rows
         sig_g = cfg.gyro_noise_density * math.sqrt(imu_hz / 2.0)
@@ -146,18 +148,24 @@ class ImuModel:
         self._slow = np.zeros((0, 6))
         self._temps: list = []
         self._pos = 0
-        self._stoch: list = []
+        self._stoch = None
+        # The simulator's step kernel, which samples the one-per-step IMU (None: unattached).
+        self.kernel = None
 
     def set_injected_gyro_bias(self, bias_frd_rad_s) -> None:
         """Disturbance bias on top of the scenario's constant one."""
         c = self.const_gyro_bias
         self.injected = [c[0] + bias_frd_rad_s[0], c[1] + bias_frd_rad_s[1], c[2] + bias_frd_rad_s[2]]
+        if self.kernel is not None:
+            self.kernel.set_injected(*self.injected)
 
     def bias6(self) -> list:
         """Total bias (gyro xyz rad/s, accel xyz m/s^2) of the last step, for truth."""
-        if not self._pos:
+        scalar = self.kernel is not None and self.imu_hz == self.physics_hz
+        pos = self.kernel.pos if scalar else self._pos
+        if not pos:
             return list(self.injected) + [0.0] * 3
-        row = self._slow[self._pos - 1].tolist()
+        row = self._slow[pos - 1].tolist()
         j = self.injected
         return [row[0] + j[0], row[1] + j[1], row[2] + j[2], row[3], row[4], row[5]]
 
@@ -172,51 +180,14 @@ class ImuModel:
         self._temps = temps.tolist()
         self._pos = 0
         if scalar:
-            self._stoch = (self._slow + self.white.next_block()).ravel().tolist()
+            self._stoch = np.ascontiguousarray(self._slow + self.white.next_block())
 
-    def step_scalar(self, sfx, sfy, sfz, wx, wy, wz, o1, o2, o3, o4) -> tuple:
-        """One sample at the end of the step from the true specific force, rates and
-        rotor speeds. Returns (ax, ay, az, gx, gy, gz, temp_c)."""
-        if self._pos >= self.block_rows or not self._stoch:
-            self._next_block(True)
-        pos = self._pos
-        self._pos = pos + 1
-        self.temp_c = t = self._temps[pos]
-        i = pos * 6
-        n = self._stoch
-        j = self.injected
-        # Rotor phases at the end of the step, unrolled over the four motors.
-        dt = self.dt_s
-        ph = self.phase
-        p1 = (ph[0] + o1 * dt) % _TWO_PI
-        p2 = (ph[1] + o2 * dt) % _TWO_PI
-        p3 = (ph[2] + o3 * dt) % _TWO_PI
-        p4 = (ph[3] + o4 * dt) % _TWO_PI
-        self.phase = [p1, p2, p3, p4]
-        va, vg = self.vib_a, self.vib_g
-        if va or vg:
-            k = self.inv_omega_max2
-            s1, s2, s3, s4 = o1 * o1 * k, o2 * o2 * k, o3 * o3 * k, o4 * o4 * k
-            cos, sin = math.cos, math.sin
-            c1, c2, c3, c4 = cos(p1), cos(p2), cos(p3), cos(p4)
-            n1, n2, n3, n4 = sin(p1), sin(p2), sin(p3), sin(p4)
-            vx = s1 * c1 + s2 * c2 + s3 * c3 + s4 * c4
-            vy = -s1 * n1 - s2 * n2 + s3 * n3 + s4 * n4          # SPIN_CW = (-1, -1, 1, 1)
-            vz = s1 * n1 * c1 + s2 * n2 * c2 + s3 * n3 * c3 + s4 * n4 * c4   # sin(2p) / 2
-        else:   # vibration off: skip the eight trig calls
-            vx = vy = vz = 0.0
-        ax = sfx + va * vx + n[i + 3]
-        ay = sfy + va * vy + n[i + 4]
-        az = sfz + va * vz + n[i + 5]
-        gx = wx + j[0] + vg * vy + n[i]
-        gy = wy + j[1] + vg * vx + n[i + 1]
-        gz = wz + j[2] + vg * vz + n[i + 2]
-        ra, rg = self.range_a, self.range_g
-        if not (-ra < ax < ra and -ra < ay < ra and -ra < az < ra
-                and -rg < gx < rg and -rg < gy < rg and -rg < gz < rg):
-            ax, ay, az = (min(max(v, -ra), ra) for v in (ax, ay, az))
-            gx, gy, gz = (min(max(v, -rg), rg) for v in (gx, gy, gz))
-        return ax, ay, az, gx, gy, gz, t
+    def next_scalar_block(self) -> tuple:
+        """The next block for the one-sample-per-step path (the step kernel samples):
+        (slow biases + white noise (rows, 6) gyro xyz then accel xyz, die temperature
+        (rows)). The maths of a sample are in bridge/step_python.py imu_scalar."""
+        self._next_block(True)
+        return self._stoch, np.asarray(self._temps)
 
     def step_block(self, prev6, cur6, frac_col: np.ndarray, o1, o2, o3, o4,
                    out: np.ndarray) -> None:

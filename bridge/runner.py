@@ -64,63 +64,78 @@ class BridgeLoop:
         self.settle_ns = int(settle_s * _NS)
         self._att_err_sq = []
         self._alt_err_sq = []
+        # Bound methods looked up once: `seg.sensors.push_batch` is three lookups a step.
+        self._step = sim.step
+        self._push = segment.sensors.push_batch
+        self._pop_pwm = segment.actuators.pop_into
+        self._set_word = segment.set_word
+        self._word = segment.word
+        self._hash_update = self._hash.update
+        raw = memoryview(self._pwm_buf.view(np.uint8))
+        self._pwm_raw = raw
+        self._pwm_u8 = raw
+        self._pwm_u16 = raw.cast("H")
+        self._pwm_i64 = raw.cast("q")
 
     # -- one step ---------------------------------------------------------
     def publish_step(self) -> np.ndarray:
         """Advance physics one step with the held PWM; publish its records."""
         sim = self.sim
-        recs = sim.step(self.pwm_us)
+        recs = self._step(self.pwm_us)
         if self._trace:
-            self._hash.update(recs)
+            self._hash_update(recs)
         # A refused push (non-overwriting ring, full) is counted by the ring as
         # rejected and reported by the start-up checks and the summary.
-        self.seg.sensors.push_batch(recs)
-        self.seg.set_word(ls.BRIDGE_SIM_NS, sim.sim_ns)
+        self._push(recs)
+        sim_ns = sim.sim_ns
+        self._set_word(ls.BRIDGE_SIM_NS, sim_ns)
         events = sim.events
         if events:
             if self.sink is not None:
-                for sim_ns, text in events:
-                    self.sink.event(sim_ns, "disturbance", text)
+                for ev_ns, text in events:
+                    self.sink.event(ev_ns, "disturbance", text)
             events.clear()
-        if sim.step_index % self.ERROR_SAMPLE_STEPS == 0 and sim.sim_ns >= self.settle_ns:
+        if sim.step_index % self.ERROR_SAMPLE_STEPS == 0 and sim_ns >= self.settle_ns:
             self._sample_errors()
         return recs
 
     def collect_pwm(self) -> int:
         """Drain the actuator ring; hold the newest command. Returns records read."""
-        n = self.seg.actuators.pop_into(self._pwm_buf)
+        n = self._pop_pwm(self._pwm_buf)
         if n == 0:
             return 0
         last = n - 1
-        self.pwm_us = tuple(self._col_us[last, :4].tolist())
-        self.armed = bool(self._col_armed[last])
+        # Header and payload fields through memoryviews: Python ints, no numpy scalars.
+        u16, i64 = self._pwm_u16, self._pwm_i64
+        b = last * 32 + 12                       # pwm_us[0..3]: payload bytes 0..7
+        self.pwm_us = (u16[b], u16[b + 1], u16[b + 2], u16[b + 3])
+        self.armed = bool(self._pwm_u8[last * 64 + 41])
         st = self.stats
         if st.pwm_first_sim_ns < 0:
-            st.pwm_first_sim_ns = int(self._col_sim[0])
-            st.pwm_first_wall_ns = int(self._col_wall[0])
-        st.pwm_last_sim_ns = int(self._col_sim[last])
-        st.pwm_last_wall_ns = int(self._col_wall[last])
+            st.pwm_first_sim_ns = i64[1]
+            st.pwm_first_wall_ns = i64[2]
+        st.pwm_last_sim_ns = i64[last * 8 + 1]
+        st.pwm_last_wall_ns = i64[last * 8 + 2]
         st.pwm_received += n
         if self.sink is not None:
             self.sink.pwm_records(self._pwm_view[:n])
         # Hash without wall-clock stamps: only what lockstep makes deterministic.
         if self._trace:
-            self._col_wall[:n] = 0
-            self._hash.update(self._pwm_buf[:n])
+            for i in range(n):
+                i64[i * 8 + 2] = 0
+            self._hash_update(self._pwm_raw[:n * 64])
         return n
 
     def fc_caught_up(self) -> bool:
-        return self.seg.word(ls.FC_SIM_NS) >= self.sim.sim_ns
+        return self._word(ls.FC_SIM_NS) >= self.sim.sim_ns
 
     # -- summary helpers ----------------------------------------------------
     def _sample_errors(self) -> None:
-        t = self.sim.truth()
-        roll, pitch = t["euler_rad"][0], t["euler_rad"][1]
+        roll, pitch, alt = self.sim.roll_pitch_alt()
         cmd = self.sim.command
         er = roll - cmd["roll_rad"]
         ep = pitch - cmd["pitch_rad"]
         self._att_err_sq.append(er * er + ep * ep)
-        alt = -float(t["pos_ned_m"][2])
         self._alt_err_sq.append((alt - cmd["alt_m"]) ** 2)
 
     def attitude_rms_deg(self) -> float | None:

@@ -17,8 +17,12 @@ Motor order is ArduCopter quad X: 1 front-right CCW, 2 back-left CCW,
 Randomness: only from the scenario seed (named streams, see noise.py); the same
 scenario, seed and PWM sequence give identical record bytes.
 
-The hot path keeps JSBSim property handles' bound methods in tuples and does
-scalar maths in plain Python; numpy is used only for the oversampled IMU block.
+The hot path is one call into the C step kernel (bridge/src/stepmodule.c; its
+readable Python reference is bridge/step_python.py, selectable with
+kernel="python"): it sets the PWM, runs JSBSim, reads the state through the
+property nodes and writes the IMU and ground-truth records. Python keeps what
+happens at 100 Hz or less (baro, mag, GNSS, setpoints, crash messages, noise
+blocks) and the oversampled IMU block (numpy, imu.py).
 """
 
 from __future__ import annotations
@@ -27,18 +31,18 @@ import math
 
 import numpy as np
 
+from silbridge.bridge import _step
 from silbridge.bridge import step_buffer as sb
+from silbridge.bridge import step_python as step_py
 from silbridge.bridge.disturbances import Disturbances
 from silbridge.bridge.errors import SimulatorError
-from silbridge.bridge.fdm import FT_M, LBF_N, PSF_PA, ROTOR_HUBS_FRD_M, SLUG_KG, Fdm
+from silbridge.bridge.fdm import FT_M, LBF_N, PSF_PA, SLUG_KG, Fdm
 from silbridge.bridge.frames import quat_from_euler, wrap_pi
 from silbridge.bridge.imu import ImuModel
 from silbridge.bridge.lowrate import Baro, Gnss, Mag
 from silbridge.bridge.noise import DEFAULT_BLOCK_ROWS
 from silbridge.bridge.scenario import draw_rng
 from silbridge.bridge.setpoints import SetpointProgram
-from silbridge.mavlink.hil_quant import down_m as _q_down
-from silbridge.mavlink.hil_quant import velocity_m_s as _q_vel
 from silbridge.shm.records import Kind
 
 _NS = 1_000_000_000
@@ -46,7 +50,10 @@ _FLIP_LIMIT_S = 1.0   # upside down this long in the air counts as a crash
 
 
 class Simulator:
-    def __init__(self, scenario, imu_hz: int | None = None, block_rows: int = DEFAULT_BLOCK_ROWS):
+    def __init__(self, scenario, imu_hz: int | None = None, block_rows: int = DEFAULT_BLOCK_ROWS,
+                 kernel: str = "c"):
+        if kernel not in ("c", "python"):
+            raise SimulatorError(f"kernel must be 'c' or 'python', got {kernel!r}")
         sc = scenario
         self.scenario = sc
         physics_hz = int(sc.physics.rate_hz)
@@ -96,7 +103,6 @@ class Simulator:
         self._crash_descent_m_s = sc.physics.crash_descent_m_s
         self._cos_crash_tilt = math.cos(math.radians(sc.physics.crash_tilt_deg))
         self._flip_steps = int(_FLIP_LIMIT_S * physics_hz)
-        self._upside_down_steps = 0
         # Hubs are within 0.23 m of the CG: below that height a strike is possible.
         self._strike_check_agl_m = 0.25
 
@@ -111,34 +117,55 @@ class Simulator:
         self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4)
         self._seq = [0] * 9   # records published per kind; the header seq is this mod 2^32
 
-        # Hot-path handles as bound methods.
-        self._set_pwm = tuple(h.set_double_value for h in fdm.h_pwm)
-        self._run = fdm.fdm.run
+        # The per-step kernel (C; step_python.Kernel is its readable reference): it
+        # calls these bound methods of JSBSim's property nodes itself.
         gd = lambda h: h.get_double_value  # noqa: E731
-        self._get_gyro = tuple(gd(h) for h in (fdm.h_p, fdm.h_q, fdm.h_r))
-        self._get_force = tuple(gd(h) for h in (fdm.h_fbx, fdm.h_fby, fdm.h_fbz))
-        self._get_att = tuple(gd(h) for h in (fdm.h_phi, fdm.h_theta, fdm.h_psi))
-        self._get_vel = tuple(gd(h) for h in (fdm.h_vn, fdm.h_ve, fdm.h_vd))
-        self._get_pos = tuple(gd(h) for h in (fdm.h_lat, fdm.h_lon, fdm.h_hagl))
-        self._get_omega = tuple(gd(h) for h in fdm.h_omega)
-        self._get_gear = gd(fdm.h_gear)
-        self._get_pressure = gd(fdm.h_pressure)
+        getters = [gd(h) for h in (fdm.h_p, fdm.h_q, fdm.h_r, fdm.h_fbx, fdm.h_fby, fdm.h_fbz,
+                                   fdm.h_phi, fdm.h_theta, fdm.h_psi, fdm.h_vn, fdm.h_ve,
+                                   fdm.h_vd, fdm.h_lat, fdm.h_lon, fdm.h_hagl, *fdm.h_omega,
+                                   fdm.h_gear, fdm.h_pressure)]
         self._get_temp = gd(fdm.h_temp)
         # specific force [m/s^2] = force [lbf] / mass [slug] * ft->m
         self._lbf_to_m_s2 = FT_M / (fdm.mass_kg / SLUG_KG)
-        self._was_on_ground = self._get_gear() > 0
         self._home = (fdm.home_lat_rad, fdm.home_lon_rad, fdm.m_per_rad_lat, fdm.m_per_rad_lon,
                       fdm.home_agl_m)
-        self._prev_vd = 0.0
+        consts = {"lbf_to_m_s2": self._lbf_to_m_s2, "ft_m": FT_M, "psf_pa": PSF_PA,
+                  "lat0": fdm.home_lat_rad, "lon0": fdm.home_lon_rad,
+                  "m_lat": fdm.m_per_rad_lat, "m_lon": fdm.m_per_rad_lon,
+                  "agl0": fdm.home_agl_m, "dt_s": self.dt_s,
+                  "inv_omega_max2": self.imu.inv_omega_max2, "vib_a": self.imu.vib_a,
+                  "vib_g": self.imu.vib_g, "range_a": self.imu.range_a,
+                  "range_g": self.imu.range_g, "baro_alpha": self.baro.alpha,
+                  "cos_crash_tilt": self._cos_crash_tilt,
+                  "strike_agl": self._strike_check_agl_m}
+        self._state = np.zeros(step_py.ST_COUNT)
+        self._state[step_py.ST_BARO_PA] = self.baro.filtered_pa
+        self._state[step_py.ST_TEMP_C] = ambient_c
+        kernel_cls = _step.Kernel if kernel == "c" else step_py.Kernel
+        self.kernel = kernel_cls(
+            self.buffer.buf, [h.set_double_value for h in fdm.h_pwm], fdm.fdm.run, getters,
+            self._state, np.array([consts[n] for n in step_py.KERNEL_CONSTS]),
+            np.array(self.imu.phase), self.dt_ns, self._flip_steps, self._scalar_imu,
+            fdm.h_gear.get_double_value() > 0)
+        self.imu.kernel = self.kernel
+        self.kernel.set_injected(*self.imu.injected)
+        if self._scalar_imu:
+            self.kernel.set_block(*self.imu.next_scalar_block())
+            self._kstep = self.kernel.step
+        else:
+            self._kstep_gt = self.kernel.step_gt
+        self._views = self.buffer._views
         self._prev6 = self._true6()
+        self._update_next_slow()
 
     # --- helpers --------------------------------------------------------------------
     def _true6(self) -> tuple:
         """True (accel xyz, gyro xyz) now: the interpolation start of the next step."""
         k = self._lbf_to_m_s2
-        g = self._get_gyro
-        f = self._get_force
-        return (f[0]() * k, f[1]() * k, f[2]() * k, g[0](), g[1](), g[2]())
+        f = self.fdm
+        return (f.h_fbx.get_double_value() * k, f.h_fby.get_double_value() * k,
+                f.h_fbz.get_double_value() * k, f.h_p.get_double_value(),
+                f.h_q.get_double_value(), f.h_r.get_double_value())
 
     def _next_seq(self, kind: int) -> int:
         s = self._seq[kind]
@@ -148,108 +175,89 @@ class Simulator:
     def published_counts(self) -> dict[str, int]:
         """Records published so far per kind (not wrapped)."""
         s = self._seq
-        return {"imu": s[Kind.IMU], "gt_att": s[Kind.GT_ATT], "gt_nav": s[Kind.GT_NAV],
+        imu, att, nav = self.kernel.seqs()
+        if not self._scalar_imu:
+            imu = s[Kind.IMU]
+        return {"imu": imu, "gt_att": att, "gt_nav": nav,
                 "baro": s[Kind.BARO], "mag": s[Kind.MAG], "gnss": s[Kind.GNSS],
                 "setpoint": s[Kind.SETPOINT]}
 
     # --- the step ---------------------------------------------------------------------
     def step(self, pwm_us) -> np.ndarray:
         k = self.step_index + 1
-        sim_ns = k * self.dt_ns
-        p0, p1, p2, p3 = pwm_us
-        if p0 != p0 or p1 != p1 or p2 != p2 or p3 != p3:   # NaN: a bug upstream, never fly it
-            raise ValueError(f"PWM command contains NaN at step {k}: {list(pwm_us)}")
-        sp = self._set_pwm
-        sp[0](p0)
-        sp[1](p1)
-        sp[2](p2)
-        sp[3](p3)
         dist = self.dist
         if k == dist.next_step:
             dist.switch(k)
         elif dist._forces or dist._ramps:
             dist.update(k)
-        self._run()
-        self.step_index = k
-        self.sim_ns = sim_ns
-
-        g = self._get_gyro
-        wx, wy, wz = g[0](), g[1](), g[2]()
-        f = self._get_force
-        c = self._lbf_to_m_s2
-        fx, fy, fz = f[0]() * c, f[1]() * c, f[2]() * c
-        a = self._get_att
-        phi, theta, psi = a[0](), a[1](), a[2]()
-        v = self._get_vel
-        vn, ve, vd = v[0]() * FT_M, v[1]() * FT_M, v[2]() * FT_M
-        o = self._get_omega
-        o1, o2, o3, o4 = o[0](), o[1](), o[2](), o[3]()
-        on_ground = self._get_gear() > 0.0
-        baro = self.baro
-        baro.filtered_pa += baro.alpha * (self._get_pressure() * PSF_PA - baro.filtered_pa)
-
-        buf = self.buffer
-        seq = self._seq
-        qw, qx, qy, qz = quat_from_euler(phi, theta, psi)
-        if qw < 0.0:  # JSBSim's psi is in [0, 2 pi): keep the w >= 0 hemisphere
-            qw, qx, qy, qz = -qw, -qx, -qy, -qz
-        pos = self._get_pos
-        lat, lon, hagl_m = pos[0](), pos[1](), pos[2]() * FT_M
-        lat0, lon0, m_lat, m_lon, agl0 = self._home
-        pn = (lat - lat0) * m_lat
-        pe = (lon - lon0) * m_lon
-        # Truth as HIL_STATE_QUATERNION carries it (whole mm down, whole cm/s), whatever the
-        # transport: the FC blends truth altitude and climb, so it must read the same numbers
-        # over shared memory and over MAVLink. Dynamics use JSBSim's own state, not these.
-        # Inline fast path (same arithmetic as hil_quant, which handles NaN and the int16
-        # range); it saves ~1 us per step, a few per cent of the whole loop.
-        pd = agl0 - hagl_m
-        pd = round(pd * 1000.0) / 1000.0 if -1e6 < pd < 1e6 else _q_down(pd)
-        gvn = round(vn * 100.0) / 100.0 if -327.0 < vn < 327.0 else _q_vel(vn)
-        gve = round(ve * 100.0) / 100.0 if -327.0 < ve < 327.0 else _q_vel(ve)
-        gvd = round(vd * 100.0) / 100.0 if -327.0 < vd < 327.0 else _q_vel(vd)
-
         if self._scalar_imu:
-            ax, ay, az, gx, gy, gz, temp_c = self.imu.step_scalar(fx, fy, fz, wx, wy, wz,
-                                                                  o1, o2, o3, o4)
-            sb.IMU_GT.pack_into(
-                buf.buf, 0,
-                1, 0, seq[1] & 0xFFFFFFFF, sim_ns, 0, ax, ay, az, gx, gy, gz, temp_c, 0, 1, 0,
-                5, 0, seq[5] & 0xFFFFFFFF, sim_ns, 0, qw, qx, qy, qz, wx, wy, wz, fx, fy, fz,
-                6, 0, seq[6] & 0xFFFFFFFF, sim_ns, 0, pn, pe, pd, gvn, gve, gvd, on_ground)
-            seq[1] += 1
-            count = 3
+            flags = self._kstep(pwm_us)        # IMU, GT_ATT, GT_NAV in slots 0..2
+            count = flags & 0xFF
         else:
-            count = self._imu_block(sim_ns, wx, wy, wz, fx, fy, fz, o1, o2, o3, o4)
-            sb.GT.pack_into(
-                buf.buf, count * 64,
-                5, 0, seq[5] & 0xFFFFFFFF, sim_ns, 0, qw, qx, qy, qz, wx, wy, wz, fx, fy, fz,
-                6, 0, seq[6] & 0xFFFFFFFF, sim_ns, 0, pn, pe, pd, gvn, gve, gvd, on_ground)
-            count += 2
-        seq[5] += 1
-        seq[6] += 1
+            n = self._imu_count(k)
+            flags = self._kstep_gt(pwm_us, n)  # GT_ATT, GT_NAV after the n IMU slots
+            self._imu_block(k * self.dt_ns, n)
+            count = n + (flags & 0xFF)
+        self.step_index = k
+        self.sim_ns = k * self.dt_ns
+        if flags & 0xFF00:
+            count = self._after_step(flags, count)
+        return self._views[count]
 
+    def _after_step(self, flags: int, count: int) -> int:
+        """What the kernel flagged: noise refill, ground contact, crashes, 100 Hz sensors."""
+        st = self._state
+        if flags & step_py.F_BLOCK_DONE:
+            self.kernel.set_block(*self.imu.next_scalar_block())
+        if flags & step_py.F_GROUND_CHANGED:
+            on_ground = st[step_py.ST_ON_GROUND] > 0.0
+            self.fdm.set_air_integrator(not on_ground)
+            prev_vd = float(st[step_py.ST_PREV_VD])
+            if on_ground and prev_vd > self._crash_descent_m_s:
+                self._crash(f"hard touchdown at {prev_vd:.2f} m/s descent")
+        if flags & step_py.F_TIPPED:
+            cos_tilt = max(-1.0, float(st[step_py.ST_COS_TILT]))
+            self._crash(f"tipped over on the ground ({math.degrees(math.acos(cos_tilt)):.0f} deg)")
+        if flags & step_py.F_FLIPPED:
+            self._crash("flipped: upside down for 1 s")
+        if flags & step_py.F_ROTOR_STRIKE:
+            self._crash("rotor strike: a rotor hub touched the ground")
+        if flags & step_py.F_SLOW_DUE:
+            count = self._slow_sensors(count)
+            self.buffer.finish(count)
+        return count
+
+    def _slow_sensors(self, count: int) -> int:
+        """Baro, mag and GNSS records due at this step, and a changed setpoint."""
+        sim_ns = self.sim_ns
+        st = self._state
+        buf = self.buffer
+        baro = self.baro
         if sim_ns >= baro.schedule.next_ns:
             baro.schedule.advance()
+            baro.filtered_pa = float(st[step_py.ST_BARO_PA])
             sb.BARO.pack_into(buf.buf, count * 64, 2, 0, self._next_seq(2), sim_ns, 0,
                               baro.sample(), self._get_temp() / 1.8 - 273.15)
             count += 1
         mag = self.mag
         if sim_ns >= mag.schedule.next_ns:
             mag.schedule.advance()
+            phi, theta, psi = st[step_py.ST_EULER:step_py.ST_EULER + 3].tolist()
             bx, by, bz = mag.sample(phi, theta, psi)
             sb.MAG.pack_into(buf.buf, count * 64, 3, 0, self._next_seq(3), sim_ns, 0, bx, by, bz)
             count += 1
         gnss = self.gnss
         if sim_ns >= gnss.schedule.next_ns:
             gnss.schedule.advance()
-            gnss.epoch(sim_ns, lat, lon, self.fdm.ground_alt_m + hagl_m, (vn, ve, vd))
+            lat, lon, hagl_m = st[step_py.ST_LAT:step_py.ST_HAGL + 1].tolist()
+            vel = tuple(st[step_py.ST_VEL:step_py.ST_VEL + 3].tolist())
+            gnss.epoch(sim_ns, lat, lon, self.fdm.ground_alt_m + hagl_m, vel)
         pending = gnss.pending
         while pending and pending[0][0] <= sim_ns:
             _, _, fix = pending.popleft()
             sb.GNSS.pack_into(buf.buf, count * 64, 4, 0, self._next_seq(4), sim_ns, 0, *fix)
             count += 1
-        if k == self.setpoints.next_step:
+        if self.step_index == self.setpoints.next_step:
             _, s_roll, s_pitch, s_yaw, s_alt, mask = self.setpoints.pop()
             sb.SETPOINT.pack_into(buf.buf, count * 64, 8, 0, self._next_seq(8), sim_ns, 0,
                                   s_roll, s_pitch, s_yaw, s_alt, mask)
@@ -259,59 +267,46 @@ class Simulator:
                 cmd["roll_rad"], cmd["pitch_rad"] = s_roll, s_pitch
             if mask & 2:
                 cmd["alt_m"] = s_alt
+        self._update_next_slow()
+        return count
 
-        # Ground contact: integrator choice and crash detection.
-        if on_ground != self._was_on_ground:
-            self.fdm.set_air_integrator(not on_ground)
-            if on_ground and self._prev_vd > self._crash_descent_m_s:
-                self._crash(f"hard touchdown at {self._prev_vd:.2f} m/s descent")
-            self._was_on_ground = on_ground
-        self._prev_vd = vd
-        cos_tilt = 1.0 - 2.0 * (qx * qx + qy * qy)
-        if on_ground and cos_tilt < self._cos_crash_tilt:
-            self._crash(f"tipped over on the ground ({math.degrees(math.acos(max(-1.0, cos_tilt))):.0f} deg)")
-        if cos_tilt < 0.0:
-            self._upside_down_steps += 1
-            if self._upside_down_steps >= self._flip_steps:
-                self._crash("flipped: upside down for 1 s")
-        else:
-            self._upside_down_steps = 0
-        if hagl_m < self._strike_check_agl_m and self._rotor_strike(phi, theta, hagl_m):
-            self._crash("rotor strike: a rotor hub touched the ground")
-        return buf.finish(count)
+    def _update_next_slow(self) -> None:
+        """Tell the kernel the sim time of the next baro/mag/GNSS/setpoint record."""
+        due = [self.baro.schedule.next_ns, self.mag.schedule.next_ns,
+               self.gnss.schedule.next_ns]
+        if self.gnss.pending:
+            due.append(self.gnss.pending[0][0])
+        if self.setpoints.next_step > 0:
+            due.append(self.setpoints.next_step * self.dt_ns)
+        self.kernel.next_slow_ns = min(due)
 
-    def _imu_block(self, sim_ns, wx, wy, wz, fx, fy, fz, o1, o2, o3, o4) -> int:
+    def _imu_count(self, k: int) -> int:
+        """IMU samples carried by step k (imu.py: (k-1) dt < t_m <= k dt)."""
+        if self._n_fixed:
+            return self._n_fixed
+        m0 = ((k - 1) * self.dt_ns * self.imu_hz) // _NS + 1
+        m1 = (k * self.dt_ns * self.imu_hz) // _NS
+        return max(0, m1 - m0 + 1)
+
+    def _imu_block(self, sim_ns: int, n: int) -> None:
         """Oversampled (or sub-sampled) IMU records of this step into slots 0..n-1."""
-        cur6 = (fx, fy, fz, wx, wy, wz)
+        st = self._state.tolist()
+        cur6 = (st[3], st[4], st[5], st[0], st[1], st[2])   # accel xyz, gyro xyz
         base_ns = sim_ns - self.dt_ns
         if self._n_fixed:
-            n = self._n_fixed
             times = self._offsets_ns + base_ns
             frac_col = self._frac_col
         else:
             m0 = (base_ns * self.imu_hz) // _NS + 1
-            m1 = (sim_ns * self.imu_hz) // _NS
-            n = max(0, m1 - m0 + 1)
-            times = (np.arange(m0, m1 + 1, dtype=np.int64) * _NS) // self.imu_hz
+            times = (np.arange(m0, m0 + n, dtype=np.int64) * _NS) // self.imu_hz
             frac_col = ((times - base_ns) / self.dt_ns)[:, None]
         buf = self.buffer
         if n:
             buf.write_imu_headers(n, self._seq[1] & 0xFFFFFFFF, times)
             self._seq[1] += n
+        o1, o2, o3, o4 = st[step_py.ST_OMEGA:step_py.ST_OMEGA + 4]
         self.imu.step_block(self._prev6, cur6, frac_col, o1, o2, o3, o4, buf.imu_payload(n))
         self._prev6 = cur6
-        return n
-
-    @staticmethod
-    def _rotor_strike(phi: float, theta: float, hagl_m: float) -> bool:
-        """True when a rotor hub is at or below the ground (flat terrain)."""
-        sth, cth = math.sin(theta), math.cos(theta)
-        sph_cth, cph_cth = math.sin(phi) * cth, math.cos(phi) * cth
-        for x, y, z in ROTOR_HUBS_FRD_M:
-            down_m = -sth * x + sph_cth * y + cph_cth * z   # NED down offset of the hub
-            if hagl_m + (-down_m) <= 0.0:
-                return True
-        return False
 
     def _event(self, sim_ns: int, text: str) -> None:
         # Looked up at call time: the caller may drain or replace self.events.
@@ -357,9 +352,17 @@ class Simulator:
             "pressure_pa": gd(fdm.h_pressure) * PSF_PA,
             "imu_bias_gyro_frd_rad_s": tuple(self.imu.bias6()[:3]),
             "imu_bias_accel_frd_m_s2": tuple(self.imu.bias6()[3:]),
-            "imu_temp_c": self.imu.temp_c,
+            "imu_temp_c": (float(self._state[step_py.ST_TEMP_C]) if self._scalar_imu
+                           else self.imu.temp_c),
             "crashed": self.crashed,
         }
+
+    def roll_pitch_alt(self) -> tuple:
+        """True roll, pitch [rad] and height above home [m] after the last step (cheap:
+        the kernel's state, for per-step summaries; truth() has everything)."""
+        st = self._state
+        return (float(st[step_py.ST_EULER]), float(st[step_py.ST_EULER + 1]),
+                float(st[step_py.ST_HAGL]) - self.fdm.home_agl_m)
 
     def thrust_n(self) -> tuple:
         """Current rotor thrusts [N], motors 1..4."""

@@ -2,9 +2,9 @@
 
 Records use the shm contract (silbridge.shm.records): 64-byte slots, header
 {kind, flags, seq, sim_ns, wall_ns}. The buffer is a bytearray with numpy views
-over it: `Struct.pack_into` writes scalar records (one call packs IMU, GT_ATT
-and GT_NAV of a 1-sample step: ~1 us instead of tens of numpy field writes),
-and the oversampled IMU block is written through uint32/float32/int64 views in
+over it: the C step kernel (bridge/src/stepmodule.c) writes the IMU and
+ground-truth records in place, `Struct.pack_into` the low-rate ones and the
+Python reference kernel's, and the oversampled IMU block is written through uint32/float32/int64 views in
 four vectorised assignments. wall_ns stays 0 (the ring stamps it).
 
 `records(count)` returns a RECORD_DTYPE view of the first `count` slots: it is
@@ -28,14 +28,14 @@ MAG_FMT = HEADER + "3f28x"
 GNSS_FMT = HEADER + "iii3fHHBB10x"
 SETPOINT_FMT = HEADER + "4fI20x"
 
-IMU_GT = struct.Struct("<" + IMU_FMT + GT_ATT_FMT + GT_NAV_FMT)
+IMU = struct.Struct("<" + IMU_FMT)
 GT = struct.Struct("<" + GT_ATT_FMT + GT_NAV_FMT)
 BARO = struct.Struct("<" + BARO_FMT)
 MAG = struct.Struct("<" + MAG_FMT)
 GNSS = struct.Struct("<" + GNSS_FMT)
 SETPOINT = struct.Struct("<" + SETPOINT_FMT)
 
-for _s, _n in ((IMU_GT, 3), (GT, 2), (BARO, 1), (MAG, 1), (GNSS, 1), (SETPOINT, 1)):
+for _s, _n in ((IMU, 1), (GT, 2), (BARO, 1), (MAG, 1), (GNSS, 1), (SETPOINT, 1)):
     assert _s.size == _n * RECORD_SIZE, (_s.format, _s.size)
 
 _FLAGS_OFFSET = 2  # byte offset of the u16 flags in a slot; STEP_END is its low bit

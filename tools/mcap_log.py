@@ -203,6 +203,7 @@ class LogWriter:
         self._unknown: dict[int, int] = {}
         # write_cycle's cached views of the /fc/status and /timing queues.
         self._st_dtype = self._st_pending = self._st_limit = None
+        self._cycle_pwm = False     # cycle_hook(): log the PWM passed to the hook
         self._tm_pack = self._tm_pending = self._tm_limit = None
         self._events = 0
         self._event_channel: int | None = None
@@ -277,7 +278,7 @@ class LogWriter:
         if records.itemsize != RECORD_SIZE:
             raise ValueError(f"records are {RECORD_SIZE} bytes, got {records.itemsize}")
         stage = self._stage
-        stage += records.tobytes()
+        stage.extend(records)
         if len(stage) >= self._stage_bytes:
             self._split_stage()
 
@@ -294,14 +295,24 @@ class LogWriter:
         the channels' queues are cached on the writer, so this is a handful of
         copies and comparisons.
         """
+        self._cycle(records, pwm, status, timing, pwm is not None)
+
+    def cycle_hook(self, log_pwm: bool):
+        """The FC loop's sink hook, hook(records, pwm, status, timing): write_cycle
+        without a wrapper frame (a Python call is a tenth of the logging cost per
+        cycle). log_pwm: also log the PWM records (when the bridge's side cannot)."""
+        self._cycle_pwm = log_pwm
+        return self._cycle
+
+    def _cycle(self, records, pwm, status, timing, log_pwm=None) -> None:
         if records.itemsize != RECORD_SIZE:
             raise ValueError(f"records are {RECORD_SIZE} bytes, got {records.itemsize}")
         stage = self._stage
-        stage += records.tobytes()
+        stage.extend(records)       # the buffer itself: no intermediate bytes object
         if status is not None and len(status):
             if status.dtype is self._st_dtype:
                 pending = self._st_pending
-                pending += status.tobytes()
+                pending.extend(status)
                 if len(pending) >= self._st_limit:
                     self._streams[STATUS_CHANNEL].drain()
             else:  # first status rows (opens and caches the channel), or a wrong dtype
@@ -318,10 +329,10 @@ class LogWriter:
             pending += self._tm_pack(*timing)
             if len(pending) >= self._tm_limit:
                 self._streams[TIMING_CHANNEL].drain()
-        if pwm is not None and len(pwm):
+        if pwm is not None and (self._cycle_pwm if log_pwm is None else log_pwm) and len(pwm):
             if pwm.itemsize != RECORD_SIZE:
                 raise ValueError(f"records are {RECORD_SIZE} bytes, got {pwm.itemsize}")
-            stage += pwm.tobytes()
+            stage.extend(pwm)
         if len(stage) >= self._stage_bytes:
             self._split_stage()
 

@@ -21,21 +21,17 @@ class RunLogSink:
     def __init__(self, path, *, metadata: dict, fc_logs_pwm: bool = False):
         self.writer = LogWriter(path, metadata=metadata)
         self.writer.declare(TIMING_CHANNEL, TIMING_DTYPE)
-        cycle = self.writer.write_cycle
         # With the FC in its own process the bridge's PWM never reaches this
         # writer: the FC then logs the PWM it published (fc_logs_pwm). The hook is
-        # bound once here so a cycle costs one call and no branching.
-        if fc_logs_pwm:
-            self.fc_batch = lambda recs, pwm, status, timing: cycle(recs, status, timing, pwm)
-        else:
-            self.fc_batch = lambda recs, pwm, status, timing: cycle(recs, status, timing)
+        # the writer's own method, so a cycle costs one call.
+        self.fc_batch = self.writer.cycle_hook(fc_logs_pwm)
+        self.pwm_records = self.writer.write_records
 
     # fc_batch(recs, pwm, status, timing): FC side, once per cycle; timing is the
     # /timing row (sim_ns, imu_wall_ns, consume_wall_ns, pwm_wall_ns, loop_period_ns).
 
     # -- bridge side ----------------------------------------------------------
-    def pwm_records(self, pwm) -> None:
-        self.writer.write_records(pwm)
+    # pwm_records(pwm): the PWM records the bridge received (bound in __init__).
 
     def event(self, sim_ns: int, kind: str, text: str, **fields) -> None:
         self.writer.event(sim_ns, kind, text, **fields)

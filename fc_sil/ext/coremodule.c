@@ -36,6 +36,10 @@ typedef struct {
     int64_t last_kind_ns[16]; /* sim time of the last record of each kind (-1: never) */
     double accel_sum[3];      /* raw IMU accel summed since take_accel_mean() [m/s^2] */
     uint32_t accel_n;
+    /* bind_batch(): the poll loop's record, PWM and status arrays, held so step_bound(n)
+     * costs no argument parsing or slicing per call (views[0] records, 1 PWM, 2 status). */
+    Py_buffer bound[3];
+    int have_bound;
 } CoreObject;
 
 const char *fc_ext_status_name(int status)
@@ -447,34 +451,28 @@ static void emit_pwm(CoreObject *self, int64_t tick, sb_record *out, fc_core_sta
     memcpy(st_out, &c->status, sizeof *st_out);
 }
 
-static PyObject *Core_step_batch(CoreObject *self, PyObject *args)
+/* PWM ticks the outputs can hold: the smaller of the two arrays. */
+static Py_ssize_t out_capacity(const Py_buffer *pwm_buf, const Py_buffer *st_buf)
 {
-    Py_buffer rec, pwm_buf, st_buf;
-    if (!PyArg_ParseTuple(args, "y*w*w*", &rec, &pwm_buf, &st_buf)) {
-        return NULL;
-    }
-    PyObject *result = NULL;
-    const Py_ssize_t n = rec.len / SB_RECORD_SIZE;
-    const Py_ssize_t cap = (pwm_buf.len / SB_RECORD_SIZE
-                            < st_buf.len / (Py_ssize_t)sizeof(fc_core_status_t))
-                               ? pwm_buf.len / SB_RECORD_SIZE
-                               : st_buf.len / (Py_ssize_t)sizeof(fc_core_status_t);
-    if (rec.len % SB_RECORD_SIZE != 0) {
-        PyErr_SetString(PyExc_ValueError, "records must be whole 64-byte slots");
-        goto done;
-    }
-    const int64_t bound = pwm_tick_bound(&self->core, rec.buf, n);
+    const Py_ssize_t a = pwm_buf->len / SB_RECORD_SIZE;
+    const Py_ssize_t b = st_buf->len / (Py_ssize_t)sizeof(fc_core_status_t);
+    return a < b ? a : b;
+}
+
+/* Consume n records at base; PWM records and status rows go to the outputs (cap rows).
+ * Returns the PWM ticks emitted, or -1 with an exception set. */
+static Py_ssize_t run_records(CoreObject *self, const unsigned char *base, Py_ssize_t n,
+                              sb_record *pwm_out, fc_core_status_t *st_out, Py_ssize_t cap)
+{
+    const int64_t bound = pwm_tick_bound(&self->core, base, n);
     if (bound > (int64_t)cap) {
         PyErr_Format(PyExc_ValueError,
                      "output arrays hold %zd PWM ticks but this batch can produce %lld; "
                      "size them with Core.pwm_bound(records)",
                      cap, (long long)bound);
-        goto done;
+        return -1;
     }
     fc_core_t *c = &self->core;
-    const unsigned char *base = rec.buf;
-    sb_record *pwm_out = pwm_buf.buf;
-    fc_core_status_t *st_out = st_buf.buf;
     Py_ssize_t emitted = 0;
     for (Py_ssize_t i = 0; i < n; i++) {
         sb_record r;
@@ -539,12 +537,80 @@ static PyObject *Core_step_batch(CoreObject *self, PyObject *args)
             }
         }
     }
-    result = PyLong_FromSsize_t(emitted);
-done:
+    return emitted;
+}
+
+static PyObject *Core_step_batch(CoreObject *self, PyObject *args)
+{
+    Py_buffer rec, pwm_buf, st_buf;
+    if (!PyArg_ParseTuple(args, "y*w*w*", &rec, &pwm_buf, &st_buf)) {
+        return NULL;
+    }
+    PyObject *result = NULL;
+    if (rec.len % SB_RECORD_SIZE != 0) {
+        PyErr_SetString(PyExc_ValueError, "records must be whole 64-byte slots");
+    } else {
+        Py_ssize_t k = run_records(self, rec.buf, rec.len / SB_RECORD_SIZE, pwm_buf.buf,
+                                   st_buf.buf, out_capacity(&pwm_buf, &st_buf));
+        result = k < 0 ? NULL : PyLong_FromSsize_t(k);
+    }
     PyBuffer_Release(&rec);
     PyBuffer_Release(&pwm_buf);
     PyBuffer_Release(&st_buf);
     return result;
+}
+
+static void unbind(CoreObject *self)
+{
+    if (self->have_bound) {
+        for (int i = 0; i < 3; i++)
+            PyBuffer_Release(&self->bound[i]);
+        self->have_bound = 0;
+    }
+}
+
+static PyObject *Core_bind_batch(CoreObject *self, PyObject *args)
+{
+    Py_buffer v[3];
+    if (!PyArg_ParseTuple(args, "w*w*w*", &v[0], &v[1], &v[2])) {
+        return NULL;
+    }
+    if (v[0].len % SB_RECORD_SIZE != 0) {
+        PyErr_SetString(PyExc_ValueError, "records must be whole 64-byte slots");
+        for (int i = 0; i < 3; i++)
+            PyBuffer_Release(&v[i]);
+        return NULL;
+    }
+    unbind(self);
+    memcpy(self->bound, v, sizeof v);
+    self->have_bound = 1;
+    Py_RETURN_NONE;
+}
+
+static PyObject *Core_step_bound(CoreObject *self, PyObject *arg)
+{
+    Py_ssize_t n = PyLong_AsSsize_t(arg);
+    if (n == -1 && PyErr_Occurred()) {
+        return NULL;
+    }
+    if (!self->have_bound) {
+        PyErr_SetString(PyExc_RuntimeError, "step_bound needs bind_batch(records, pwm, status)");
+        return NULL;
+    }
+    if (n < 0 || n > self->bound[0].len / SB_RECORD_SIZE) {
+        PyErr_Format(PyExc_ValueError, "step_bound(%zd): the bound record array holds %zd", n,
+                     self->bound[0].len / SB_RECORD_SIZE);
+        return NULL;
+    }
+    Py_ssize_t k = run_records(self, self->bound[0].buf, n, self->bound[1].buf,
+                               self->bound[2].buf, out_capacity(&self->bound[1], &self->bound[2]));
+    return k < 0 ? NULL : PyLong_FromSsize_t(k);
+}
+
+static void Core_dealloc(CoreObject *self)
+{
+    unbind(self);
+    Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
 /* ---- micro-benchmark (silbridge fc-bench) ----------------------------------- */
@@ -653,6 +719,10 @@ static PyObject *status_layout(PyObject *module, PyObject *noargs)
 
 static PyMethodDef Core_methods[] = {
     {"reset", (PyCFunction)Core_reset, METH_NOARGS, "Reset state and inputs; keep parameters."},
+    {"bind_batch", (PyCFunction)Core_bind_batch, METH_VARARGS,
+     "bind_batch(records, pwm_out, status_out): the arrays step_bound(n) uses."},
+    {"step_bound", (PyCFunction)Core_step_bound, METH_O,
+     "step_bound(n) -> PWM ticks: step_batch over the first n bound records."},
     {"set_param", (PyCFunction)Core_set_param, METH_VARARGS,
      "set_param(index, value) -> status code (0 ok)."},
     {"get_param", (PyCFunction)Core_get_param, METH_VARARGS, "get_param(index) -> float."},
@@ -702,6 +772,7 @@ static PyTypeObject CoreType = {
     .tp_flags = Py_TPFLAGS_DEFAULT,
     .tp_doc = "The C flight-controller core (fc_core_t); see silbridge.fc_sil.core.FlightCore.",
     .tp_new = Core_new,
+    .tp_dealloc = (destructor)Core_dealloc,
     .tp_methods = Core_methods,
 };
 

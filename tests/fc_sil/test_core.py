@@ -225,3 +225,40 @@ def test_gyro_bias_is_learned_on_the_ground_and_removed_from_the_rate_loop(strea
     assert np.abs(bias[t_s > 10] - [0.05, -0.04, 0.0]).max() < 0.002
     assert np.abs(st["rate_frd_rad_s"][t_s > 10]).max() < 0.002
     assert np.abs(st["euler_est_rad"][t_s > 10, :2]).max() < np.radians(0.1)
+
+
+def test_bound_batches_match_step_batch(stream):
+    """FcLoop's path (bind_batch once, step_bound(n) per poll) gives step_batch's output."""
+    recs = stream(gt=True).batch(2000)
+    a, b = FlightCore(), FlightCore()
+    for fc in (a, b):
+        fc.arm()
+    pa, sa = a.step_batch(recs)
+    buf = np.zeros(512, R.RECORD_DTYPE)
+    pwm_out = np.zeros(512, R.PWM_DTYPE)
+    st_out = np.zeros(512, STATUS_DTYPE)
+    b._c.bind_batch(buf, pwm_out, st_out)
+    parts_p, parts_s = [], []
+    for chunk in np.array_split(recs, [1, 7, 300, 301, 1000]):
+        for i in range(0, len(chunk), 512):
+            part = chunk[i:i + 512]
+            buf[:len(part)] = part
+            k = b._c.step_bound(len(part))
+            parts_p.append(pwm_out[:k].copy())
+            parts_s.append(st_out[:k].copy())
+    pb, sb = np.concatenate(parts_p), np.concatenate(parts_s)
+    assert sa.tobytes() == sb.tobytes()
+    np.testing.assert_array_equal(pa["pwm_us"], pb["pwm_us"])
+
+
+def test_step_bound_refuses_misuse():
+    fc = FlightCore()
+    with pytest.raises(RuntimeError, match="bind_batch"):
+        fc._c.step_bound(1)
+    buf = np.zeros(8, R.RECORD_DTYPE)
+    fc._c.bind_batch(buf, np.zeros(4, R.PWM_DTYPE), np.zeros(4, STATUS_DTYPE))
+    with pytest.raises(ValueError, match="holds 8"):
+        fc._c.step_bound(9)
+    with pytest.raises(ValueError, match="whole 64-byte"):
+        fc._c.bind_batch(np.zeros(10, np.uint8), np.zeros(4, R.PWM_DTYPE),
+                         np.zeros(4, STATUS_DTYPE))

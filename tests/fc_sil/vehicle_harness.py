@@ -90,10 +90,19 @@ def fly_scripted(script, *, duration_s: float, scenario: str = "S1", params: dic
 
 
 class _DroppingC:
-    """Wraps the C Core: step_batch drops one record kind from a given sim time."""
+    """Wraps the C Core: step_batch (and FcLoop's bind_batch/step_bound) drop one record
+    kind from a given sim time."""
 
     def __init__(self, c, kind: int, after_ns: int):
         self._c, self.kind, self.after_ns = c, kind, after_ns
+        self._bound = None
+
+    def bind_batch(self, records, pwm_out, status_out):
+        self._bound = (records, pwm_out, status_out)
+
+    def step_bound(self, n):
+        records, pwm_out, status_out = self._bound
+        return self.step_batch(records[:n], pwm_out, status_out)
 
     def step_batch(self, records, pwm_out, status_out):
         keep = ~((records["kind"] == self.kind) & (records["sim_ns"] >= self.after_ns))
