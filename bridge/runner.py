@@ -71,6 +71,8 @@ class BridgeLoop:
         self._set_word = segment.set_word
         self._word = segment.word
         self._hash_update = self._hash.update
+        # A sink may log the PWM elsewhere (the FC's side) and set pwm_records to None.
+        self._log_pwm = getattr(sink, "pwm_records", None) if sink is not None else None
         raw = memoryview(self._pwm_buf.view(np.uint8))
         self._pwm_raw = raw
         self._pwm_u8 = raw
@@ -117,8 +119,8 @@ class BridgeLoop:
         st.pwm_last_sim_ns = i64[last * 8 + 1]
         st.pwm_last_wall_ns = i64[last * 8 + 2]
         st.pwm_received += n
-        if self.sink is not None:
-            self.sink.pwm_records(self._pwm_view[:n])
+        if self._log_pwm is not None:
+            self._log_pwm(self._pwm_view[:n])
         # Hash without wall-clock stamps: only what lockstep makes deterministic.
         if self._trace:
             for i in range(n):

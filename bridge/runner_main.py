@@ -65,6 +65,7 @@ class BridgeResult:
     crashed: bool = False
     late_steps: int = 0
     max_late_us: float = 0.0
+    cpu_s: float = 0.0     # the bridge thread's CPU time in the loop (with an in-process FC: both)
 
 
 def prepare_segment(seg, sim, cfg: BridgeRunConfig) -> None:
@@ -165,6 +166,7 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
     watch_every = max(1, int(0.02 * _NS / sim.dt_ns))       # ~20 ms of sim time
     pacer = None if cfg.lockstep else Pacer(sim.dt_ns, cfg.speed)
     t0 = time.monotonic_ns()
+    cpu0 = time.thread_time()
     if pacer is not None:
         pacer.start_ns = t0
     # Locals, not attribute lookups, in the per-step loop (a few hundred ns a step).
@@ -205,9 +207,12 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
     finally:
         seg.set_word(ls.STOP, 1)
     wall_ns = time.monotonic_ns() - t0
+    cpu_s = time.thread_time() - cpu0
     if fc_poll is None:
         _wait_fc_done(seg, peer_check)
-    return _result(loop, cfg, checks, wall_ns, pacer)
+    res = _result(loop, cfg, checks, wall_ns, pacer)
+    res.cpu_s = cpu_s
+    return res
 
 
 def _wait_lockstep(loop: BridgeLoop, watch: PeerWatch, slice_s: float = 0.02) -> None:

@@ -75,7 +75,8 @@ class FcLoop:
         self.core = core
         self.seg = segment
         self.supervisor = supervisor
-        self.sink = sink
+        self._sink = None
+        self._tick = None
         self.buf = np.zeros(batch, dtype=RECORD_DTYPE)
         # Outputs preallocated for the largest batch and bound to the C core once:
         # step_bound(n) then parses, slices and allocates nothing.
@@ -105,6 +106,22 @@ class FcLoop:
         self.pwm_published = 0
         self._prev_consume = 0
         self.last_sim_ns = 0
+        self.sink = sink
+
+    @property
+    def sink(self):
+        """Where each cycle is logged. A sink with capture_fc(core) has the C core append
+        the cycle's records itself and gets one tick(timing...) call per cycle; any other
+        sink gets fc_batch(records, pwm, status, timing)."""
+        return self._sink
+
+    @sink.setter
+    def sink(self, sink) -> None:
+        if self._tick is not None:
+            self.core._c.bind_log(None)
+        self._sink = sink
+        capture = getattr(sink, "capture_fc", None)
+        self._tick = capture(self.core._c) if capture is not None else None
 
     def poll(self) -> int:
         n = self._pop_into(self.buf)
@@ -138,14 +155,19 @@ class FcLoop:
         self._prev_consume = consume
         self.polls += 1
         self.records += n
-        if self.sink is not None or self.supervisor is not None:
+        if self._tick is not None:
+            self._tick(newest_sim, newest_wall, consume, pwm_wall, period)
+            sink = None
+        else:
+            sink = self._sink
+        if sink is not None or self.supervisor is not None:
             if n < _SMALL and k < _SMALL:
                 recs, pwm, status = self._recs[n], self._pwms[k], self._stats[k]
             else:
                 recs, pwm, status = self.buf[:n], self._pwm_out[:k], self._status_out[:k]
-            if self.sink is not None:
-                self.sink.fc_batch(recs, pwm, status,
-                                   (newest_sim, newest_wall, consume, pwm_wall, period))
+            if sink is not None:
+                sink.fc_batch(recs, pwm, status,
+                              (newest_sim, newest_wall, consume, pwm_wall, period))
             if self.supervisor is not None:
                 self.supervisor.after_batch(self, recs, pwm, status)
         return n

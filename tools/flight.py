@@ -169,7 +169,9 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
             guard_fc(fc)
             if opts.log_path:
                 from .run_log import RunLogSink
-                sink = RunLogSink(opts.log_path,
+                # The FC's C core logs the PWM it computes (the same records the
+                # bridge receives in lockstep): one memcpy instead of a Python call.
+                sink = RunLogSink(opts.log_path, fc_logs_pwm=True,
                                   metadata=run_metadata(opts, sc, sim, cfg, fc.core))
                 fc.sink = sink
                 fc.supervisor.sink = sink
@@ -259,6 +261,9 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         "sim_s": res.sim_s,
         "wall_s": res.wall_s,
         "realtime_factor": res.sim_s / max(res.wall_s, 1e-9),
+        # CPU seconds of the bridge's loop thread (with --processes 1 the FC's too): the
+        # speed figure that other processes on the machine do not inflate.
+        "loop_cpu_s": res.cpu_s,
         "rates_hz": rates,
         "overwritten": overwritten,
         "rejected": rejected,

@@ -9,17 +9,17 @@ Two measurements, because a writer's cost depends on where it runs:
    `write_records`, as tools/run_log.py does) or as one `write_cycle`. Hot
    caches, so this is the writer's floor. Also bulk writes (ns per row), file
    size and the time `read_log` takes to read every channel back.
-2. Real loop A/B: the project's Simulator (S1) and FlightCore stepped in
-   lockstep in this process, in blocks of steps alternately without logging,
-   with the four calls and with `write_cycle`; the difference to the unlogged
-   block just before is what logging adds to the loop, caches and all.
-   Skipped if those parts cannot be built.
+2. Real loop A/B: `silbridge fly --processes 1` itself, alternately without and
+   with --log (where the FC's C core appends records to the log's queues,
+   Core.bind_log); the loop thread's CPU time per physics step of each logged
+   flight against the unlogged flight just before it is what logging adds,
+   caches and all.
 
-Both measurements interleave their variants block by block, so that machine
-noise (other processes on the 2 cores) hits all alike, and report the median
-and the best block. Nothing is asserted.
+Both measurements interleave their variants, so that machine noise (other
+processes on the 2 cores) hits all alike, and report medians and bests.
+Nothing is asserted.
 
-    python -m silbridge.tools.log_bench [--duration 120] [--loop-steps 30000] [--json]
+    python -m silbridge.tools.log_bench [--duration 120] [--pairs 6] [--json]
 """
 
 from __future__ import annotations
@@ -115,56 +115,35 @@ def bench_read(path) -> dict:
             "file_mb": os.path.getsize(path) / 1e6}
 
 
-def bench_loop(path, steps: int, block: int = 500, **writer_kw) -> dict:
-    """Simulator + FlightCore in lockstep, blocks alternately logged three ways."""
-    try:
-        from silbridge.bridge.scenario import load_scenario
-        from silbridge.bridge.simulator import Simulator
-        from silbridge.fc_sil.core import FlightCore
-        sim = Simulator(load_scenario("S1"))
-        core = FlightCore()
-        core.arm()
-        core.set_altitude_target(5.0)
-    except Exception as exc:  # noqa: BLE001 - the loop parts are optional here
-        return {"skipped": f"{type(exc).__name__}: {exc}"}
-    w = LogWriter(path, metadata={}, **writer_kw)
-    w.declare("/timing", TIMING_DTYPE)
-    pwm_us = np.full(4, 1000, np.uint16)
-    prev_ns = 0
-    modes = ("none",) + tuple(STYLES)
-    per_block = {m: [] for m in modes}
-    for b in range(max(1, steps // (block * len(modes)))):
-        for mode in modes:
-            log = STYLES.get(mode)
-            t0 = time.perf_counter()
-            for _ in range(block):
-                recs = sim.step(pwm_us)
-                pwm, st = core.step_batch(recs)
-                if len(pwm):
-                    pwm_us = pwm["pwm_us"][-1, :4]
-                # The loop measures these times for its own statistics in every mode;
-                # only handing them to the writer counts as logging.
-                now = time.perf_counter_ns()
-                timing = (int(recs["sim_ns"][-1]), now, now, now if len(pwm) else 0,
-                          now - prev_ns)
-                prev_ns = now
-                if log is not None:
-                    log(w, recs, pwm, st, timing)
-            per_block[mode].append((time.perf_counter() - t0) / block * 1e6)
-    w.close()
-    base = np.array(per_block["none"])
-    out = {"steps": sum(len(v) for v in per_block.values()) * block,
-           "loop_us_per_step_median": float(np.median(base)),
-           "loop_us_per_step_min": float(np.min(base))}
-    for mode in STYLES:
-        # Paired with the unlogged block just before it: slow drifts in the
-        # machine's load cancel out.
-        added = np.array(per_block[mode]) - base
-        out[f"{mode}_added_us_median"] = float(np.median(added))
-        out[f"{mode}_added_pct_median"] = float(np.median(100.0 * added / base))
-        out[f"{mode}_added_us_p25"] = float(np.percentile(added, 25))
-        out[f"{mode}_added_pct_p25"] = float(np.percentile(100.0 * added / base, 25))
-    return out
+def bench_flight(tmpdir: str, pairs: int, duration_s: float, scenario: str = "S1") -> dict:
+    """The product's own loop: `fly --processes 1` (lockstep) alternately without and with
+    --log, `pairs` times; the figure is the loop thread's CPU time (loop_cpu_s), so other
+    processes on the machine do not inflate it, and each logged flight is paired with the
+    unlogged one just before it."""
+    from .flight import FlightOptions, fly_one_process
+
+    def fly(log: bool) -> float:
+        path = os.path.join(tmpdir, "flight.mcap") if log else None
+        s = fly_one_process(FlightOptions(scenario=scenario, duration_s=duration_s,
+                                          log_path=path), out=lambda line: None)
+        if path:
+            os.unlink(path)
+        return s["loop_cpu_s"] / (s["sim_s"] * 1000.0) * 1e6   # us per 1 ms physics step
+
+    fly(False)   # warm-up: imports, JSBSim load, caches
+    base, logged = [], []
+    for _ in range(max(1, pairs)):
+        base.append(fly(False))
+        logged.append(fly(True))
+    b, g = np.array(base), np.array(logged)
+    added = g - b
+    return {"scenario": scenario, "pairs": len(b), "duration_s": duration_s,
+            "loop_us_per_step_median": float(np.median(b)),
+            "loop_us_per_step_min": float(np.min(b)),
+            "logged_us_per_step_median": float(np.median(g)),
+            "added_us_median": float(np.median(added)),
+            "added_pct_median": float(np.median(100.0 * added / b)),
+            "added_pct_of_best": float(100.0 * (np.min(g) - np.min(b)) / np.min(b))}
 
 
 def main(argv=None) -> int:
@@ -172,8 +151,10 @@ def main(argv=None) -> int:
     ap.add_argument("--duration", type=float, default=120.0, help="synthetic run length [s]")
     ap.add_argument("--compression", default="none", choices=["none", "lz4", "zstd"])
     ap.add_argument("--batch-rows", type=int, default=1024)
-    ap.add_argument("--loop-steps", type=int, default=30000,
-                    help="steps of the real-loop A/B (0: skip it)")
+    ap.add_argument("--pairs", type=int, default=6,
+                    help="unlogged/logged flight pairs of the real-loop A/B (0: skip it)")
+    ap.add_argument("--flight-s", type=float, default=20.0,
+                    help="simulated seconds per A/B flight")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     run = synthetic_run(args.duration)
@@ -184,8 +165,8 @@ def main(argv=None) -> int:
                "replay": bench_replay(run, tmp, **kw),
                "bulk": bench_bulk(run, path, **kw),
                "read": bench_read(path)}
-        if args.loop_steps:
-            out["loop"] = bench_loop(os.path.join(tmp, "loop.mcap"), args.loop_steps, **kw)
+        if args.pairs:
+            out["loop"] = bench_flight(tmp, args.pairs, args.flight_s)
     if args.json:
         print(json.dumps(out))
         return 0
@@ -199,16 +180,13 @@ def main(argv=None) -> int:
     print(f"  bulk writes          : {bk['ns_per_row']:.0f} ns/row, {bk['write_s']*1e3:.0f} ms")
     print(f"  read back            : {rd['read_s']*1e3:.0f} ms, {rd['file_mb']:.1f} MB file")
     lp = out.get("loop")
-    if lp and "skipped" in lp:
-        print(f"  real loop A/B        : skipped ({lp['skipped']})")
-    elif lp:
-        print(f"  real loop A/B        : {lp['steps']} steps, loop {lp['loop_us_per_step_median']:.2f}"
-              f" us/step median ({lp['loop_us_per_step_min']:.2f} min)")
-        for mode in STYLES:
-            print(f"    + logging ({mode:>8}): +{lp[f'{mode}_added_us_median']:.2f} us/step = "
-                  f"{lp[f'{mode}_added_pct_median']:.1f} % (median of paired blocks; "
-                  f"quartile 1: +{lp[f'{mode}_added_us_p25']:.2f} us = "
-                  f"{lp[f'{mode}_added_pct_p25']:.1f} %)")
+    if lp:
+        print(f"  real loop A/B        : `fly --processes 1` {lp['scenario']}, {lp['pairs']} pairs "
+              f"of {lp['duration_s']:.0f} s flights, loop CPU {lp['loop_us_per_step_median']:.2f}"
+              f" us/step median ({lp['loop_us_per_step_min']:.2f} best)")
+        print(f"    + --log            : +{lp['added_us_median']:.2f} us/step = "
+              f"{lp['added_pct_median']:.1f} % (median of pairs; best against best: "
+              f"{lp['added_pct_of_best']:.1f} %)")
     return 0
 
 

@@ -204,6 +204,8 @@ class LogWriter:
         # write_cycle's cached views of the /fc/status and /timing queues.
         self._st_dtype = self._st_pending = self._st_limit = None
         self._cycle_pwm = False     # cycle_hook(): log the PWM passed to the hook
+        self._capture_rebind = None  # capture by a C producer (capture_targets)
+        self._capture_ticks = 0
         self._tm_pack = self._tm_pending = self._tm_limit = None
         self._events = 0
         self._event_channel: int | None = None
@@ -303,6 +305,63 @@ class LogWriter:
         cycle). log_pwm: also log the PWM records (when the bridge's side cannot)."""
         self._cycle_pwm = log_pwm
         return self._cycle
+
+    # -- capture by a C producer (fc_sil's Core.bind_log) ---------------------
+    # The producer appends raw 64-byte records straight to the queue of their kind's
+    # channel (or, for a kind whose channel is not open yet, to the mixed stage) and
+    # status rows to /fc/status; the loop calls cycle_tick() once per cycle with the
+    # /timing row. Every CAPTURE_CHECK_TICKS ticks the writer cuts full batches and
+    # splits the stage; when that opens channels it calls the rebind hook so the
+    # producer writes the new kinds directly from then on.
+    CAPTURE_CHECK_TICKS = 128
+
+    def capture_targets(self, status_dtype: np.dtype) -> tuple:
+        """(kind queues: tuple of 16 bytearray|None, stage, /fc/status queue) for a C
+        producer. Opens /fc/status and /timing now; record channels open as their first
+        records come through the stage."""
+        st = self._streams.get(STATUS_CHANNEL) or self._open(STATUS_CHANNEL, status_dtype)
+        if st.in_dtype != status_dtype:
+            raise ValueError(f"{STATUS_CHANNEL} holds {st.in_dtype} rows, not {status_dtype}")
+        tm = self._streams.get(TIMING_CHANNEL) or self._open(TIMING_CHANNEL, TIMING_DTYPE)
+        self._tm_pack, self._tm_pending, self._tm_limit = tm.packer.pack, tm.pending, tm.batch_bytes
+        queues = [None] * 16
+        for kind, name in KIND_CHANNELS.items():
+            stream = self._streams.get(name)
+            if stream is not None and stream.in_dtype == DTYPES[Kind(kind)]:
+                queues[kind] = stream.pending
+        return tuple(queues), self._stage, st.pending
+
+    def set_capture_rebind(self, rebind) -> None:
+        """rebind(): called after the stage split opened channels (see capture_targets)."""
+        self._capture_rebind = rebind
+        self._capture_ticks = 0
+
+    def cycle_tick(self, sim_ns: int, imu_wall_ns: int, consume_wall_ns: int,
+                   pwm_wall_ns: int, loop_period_ns: int) -> None:
+        """One cycle's /timing row; now and then, the batch boundaries of the queues."""
+        self._tm_pending += self._tm_pack(sim_ns, imu_wall_ns, consume_wall_ns, pwm_wall_ns,
+                                          loop_period_ns)
+        self._capture_ticks += 1
+        if self._capture_ticks >= self.CAPTURE_CHECK_TICKS:
+            self._capture_ticks = 0
+            self._capture_flush()
+
+    def _capture_flush(self) -> None:
+        opened = len(self._streams)
+        if len(self._stage) >= self._stage_bytes or (self._stage and self._rebind_pending()):
+            self._split_stage()
+        for stream in self._streams.values():
+            if len(stream.pending) >= stream.batch_bytes:
+                stream.drain()
+        if len(self._streams) != opened and self._capture_rebind is not None:
+            self._capture_rebind()
+
+    def _rebind_pending(self) -> bool:
+        """True while staged records are of a kind with no channel yet (split early, so the
+        producer soon writes that kind directly)."""
+        return any(KIND_CHANNELS.get(k) not in self._streams
+                   for k in set(np.frombuffer(self._stage, RECORD_DTYPE)["kind"][-64:].tolist())
+                   if k in KIND_CHANNELS)
 
     def _cycle(self, records, pwm, status, timing, log_pwm=None) -> None:
         if records.itemsize != RECORD_SIZE:

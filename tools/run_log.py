@@ -1,10 +1,13 @@
 """The logging sink a flight's loops call: loop hooks -> MCAP channels.
 
-The loops know nothing of MCAP: they call `fc_batch`, `pwm_records` and
-`event` on whatever sink they are given. Sensor records are logged as the FC
-consumed them (wall stamps from the ring, so the log shows what the FC really
-got, drops included); PWM as the bridge received them; FC status and per-cycle
-timing from the FC side.
+The loops know nothing of MCAP: they call `fc_batch` (or, offered
+`capture_fc`, a per-cycle tick while the FC's C core appends the records
+itself), `pwm_records` and `event` on whatever sink they are given. Sensor
+records are logged as the FC consumed them (wall stamps from the ring, so the
+log shows what the FC really got, drops included); PWM as the bridge received
+them, or with fc_logs_pwm (the FC in its own process, and `fly --processes 1`
+where the two are the same records) as the FC computed them, wall-stamped then;
+FC status and per-cycle timing from the FC side.
 """
 
 from __future__ import annotations
@@ -25,16 +28,39 @@ class RunLogSink:
         # writer: the FC then logs the PWM it published (fc_logs_pwm). The hook is
         # the writer's own method, so a cycle costs one call.
         self.fc_batch = self.writer.cycle_hook(fc_logs_pwm)
-        self.pwm_records = self.writer.write_records
+        # The bridge's hook: None when the FC logs the PWM (the bridge then skips it).
+        self.pwm_records = None if fc_logs_pwm else self.writer.write_records
+        self._fc_logs_pwm = fc_logs_pwm
+        self._unbind = None
+
+    def capture_fc(self, core_c):
+        """Let the FC's C core append what it consumes straight into the log's queues
+        (Core.bind_log); returns the per-cycle hook tick(sim_ns, imu_wall_ns,
+        consume_wall_ns, pwm_wall_ns, loop_period_ns). The FC loop uses this instead of
+        fc_batch when the sink offers it: no Python work per record."""
+        from silbridge.fc_sil.status import STATUS_DTYPE
+        writer = self.writer
+
+        def bind():
+            queues, stage, status = writer.capture_targets(STATUS_DTYPE)
+            core_c.bind_log(queues, stage, status, self._fc_logs_pwm)
+        bind()
+        writer.set_capture_rebind(bind)
+        self._unbind = lambda: core_c.bind_log(None)
+        return writer.cycle_tick
 
     # fc_batch(recs, pwm, status, timing): FC side, once per cycle; timing is the
     # /timing row (sim_ns, imu_wall_ns, consume_wall_ns, pwm_wall_ns, loop_period_ns).
 
     # -- bridge side ----------------------------------------------------------
-    # pwm_records(pwm): the PWM records the bridge received (bound in __init__).
+    # pwm_records(pwm): the PWM records the bridge received (bound in __init__; None
+    # with fc_logs_pwm: the FC logs the PWM it published, stamped when computed).
 
     def event(self, sim_ns: int, kind: str, text: str, **fields) -> None:
         self.writer.event(sim_ns, kind, text, **fields)
 
     def close(self, **summary) -> None:
+        if self._unbind is not None:    # the core must not append to a closed log
+            self._unbind()
+            self._unbind = None
         self.writer.close(**summary)

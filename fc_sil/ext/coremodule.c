@@ -40,6 +40,14 @@ typedef struct {
      * costs no argument parsing or slicing per call (views[0] records, 1 PWM, 2 status). */
     Py_buffer bound[3];
     int have_bound;
+    /* bind_log(): bytearrays step_bound appends each consumed record to (the queue of
+     * its kind, or else the mixed stage), PWM records too when log_pwm, and the status
+     * rows: a run's log then costs a memcpy per record and no Python per record. */
+    PyObject *log_kind[16];
+    PyObject *log_stage;
+    PyObject *log_status;
+    int log_pwm;
+    int log_on;               /* any record queue bound */
 } CoreObject;
 
 const char *fc_ext_status_name(int status)
@@ -587,6 +595,84 @@ static PyObject *Core_bind_batch(CoreObject *self, PyObject *args)
     Py_RETURN_NONE;
 }
 
+/* Append len bytes to a bytearray (amortised growth); -1 with an exception on failure. */
+static int append_bytes(PyObject *ba, const void *src, Py_ssize_t len)
+{
+    if (len == 0)
+        return 0;
+    const Py_ssize_t old = PyByteArray_GET_SIZE(ba);
+    if (PyByteArray_Resize(ba, old + len) < 0)
+        return -1;
+    memcpy(PyByteArray_AS_STRING(ba) + old, src, (size_t)len);
+    return 0;
+}
+
+static void clear_log(CoreObject *self)
+{
+    for (int i = 0; i < 16; i++)
+        Py_CLEAR(self->log_kind[i]);
+    Py_CLEAR(self->log_stage);
+    Py_CLEAR(self->log_status);
+    self->log_pwm = 0;
+    self->log_on = 0;
+}
+
+/* bind_log(kind_queues, stage, status, log_pwm); bind_log(None) turns capture off. */
+static PyObject *Core_bind_log(CoreObject *self, PyObject *args)
+{
+    PyObject *kinds, *stage = Py_None, *st = Py_None;
+    int log_pwm = 0;
+    if (!PyArg_ParseTuple(args, "O|OOp", &kinds, &stage, &st, &log_pwm)) {
+        return NULL;
+    }
+    if (kinds == Py_None) {
+        clear_log(self);
+        Py_RETURN_NONE;
+    }
+    if (!PyTuple_Check(kinds) || PyTuple_GET_SIZE(kinds) != 16) {
+        PyErr_SetString(PyExc_TypeError, "bind_log: kind_queues must be a tuple of 16 "
+                                         "(bytearray or None), one per record kind");
+        return NULL;
+    }
+    PyObject *objs[18];
+    for (int i = 0; i < 16; i++)
+        objs[i] = PyTuple_GET_ITEM(kinds, i);
+    objs[16] = stage;
+    objs[17] = st;
+    for (int i = 0; i < 18; i++) {
+        if (objs[i] != Py_None && !PyByteArray_Check(objs[i])) {
+            PyErr_SetString(PyExc_TypeError, "bind_log: queues must be bytearrays or None");
+            return NULL;
+        }
+    }
+    clear_log(self);
+    for (int i = 0; i < 16; i++)
+        self->log_kind[i] = objs[i] == Py_None ? NULL : Py_NewRef(objs[i]);
+    self->log_stage = stage == Py_None ? NULL : Py_NewRef(stage);
+    self->log_status = st == Py_None ? NULL : Py_NewRef(st);
+    self->log_pwm = log_pwm;
+    self->log_on = self->log_stage != NULL;
+    for (int i = 0; i < 16; i++)
+        self->log_on |= self->log_kind[i] != NULL;
+    Py_RETURN_NONE;
+}
+
+/* Append whole records to their kind's queue (or the stage); -1 on failure. */
+static int log_records(CoreObject *self, const unsigned char *base, Py_ssize_t n)
+{
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const unsigned char *rec = base + (size_t)i * SB_RECORD_SIZE;
+        uint16_t kind;
+        memcpy(&kind, rec, sizeof kind);
+        PyObject *dest = self->log_kind[kind & 15u];
+        if (dest == NULL)
+            dest = self->log_stage;
+        if (dest != NULL && append_bytes(dest, rec, SB_RECORD_SIZE) < 0)
+            return -1;
+    }
+    return 0;
+}
+
 static PyObject *Core_step_bound(CoreObject *self, PyObject *arg)
 {
     Py_ssize_t n = PyLong_AsSsize_t(arg);
@@ -604,12 +690,25 @@ static PyObject *Core_step_bound(CoreObject *self, PyObject *arg)
     }
     Py_ssize_t k = run_records(self, self->bound[0].buf, n, self->bound[1].buf,
                                self->bound[2].buf, out_capacity(&self->bound[1], &self->bound[2]));
-    return k < 0 ? NULL : PyLong_FromSsize_t(k);
+    if (k < 0) {
+        return NULL;
+    }
+    if (self->log_on && (log_records(self, self->bound[0].buf, n) < 0 ||
+                         (self->log_pwm && log_records(self, self->bound[1].buf, k) < 0))) {
+        return NULL;
+    }
+    if (self->log_status != NULL &&
+        append_bytes(self->log_status, self->bound[2].buf,
+                     k * (Py_ssize_t)sizeof(fc_core_status_t)) < 0) {
+        return NULL;
+    }
+    return PyLong_FromSsize_t(k);
 }
 
 static void Core_dealloc(CoreObject *self)
 {
     unbind(self);
+    clear_log(self);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -721,6 +820,9 @@ static PyMethodDef Core_methods[] = {
     {"reset", (PyCFunction)Core_reset, METH_NOARGS, "Reset state and inputs; keep parameters."},
     {"bind_batch", (PyCFunction)Core_bind_batch, METH_VARARGS,
      "bind_batch(records, pwm_out, status_out): the arrays step_bound(n) uses."},
+    {"bind_log", (PyCFunction)Core_bind_log, METH_VARARGS,
+     "bind_log(kind_queues[16], stage, status, log_pwm): step_bound appends consumed "
+     "records, PWM records (log_pwm) and status rows to these bytearrays; bind_log(None): off."},
     {"step_bound", (PyCFunction)Core_step_bound, METH_O,
      "step_bound(n) -> PWM ticks: step_batch over the first n bound records."},
     {"set_param", (PyCFunction)Core_set_param, METH_VARARGS,
