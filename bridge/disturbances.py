@@ -51,6 +51,8 @@ class Disturbances:
         self._active: dict[int, tuple] = {}   # index -> (d, t_on_s)
         self._forces = False
         self._ramps = False
+        self._force_plan: list = []
+        self._force_frames: set = set()
         # Fixed 1 N magnitude; the summed force vector (N) goes into the direction.
         for frame in ("ned", "frd"):
             self.fdm.set_dist_force(frame, 1.0, (0.0, 0.0, 0.0))
@@ -77,31 +79,55 @@ class Disturbances:
             elif d.type == "wind":
                 self._apply_wind(i if on else None)
         self.next_step = (self._switches[self._next][0] if self._next < len(self._switches) else -1)
-        self._forces = any(d.type == "force" for d, _ in self._active.values())
+        self._plan()
+        self._forces = bool(self._force_plan)
         self._ramps = any(d.type == "gyro_bias" for d, _ in self._active.values())
-        if not self._forces:
-            for frame in ("ned", "frd"):
+        for frame in ("ned", "frd"):
+            if frame not in self._force_frames:
                 self.fdm.set_dist_force(frame, 1.0, (0.0, 0.0, 0.0))
-        self.update(k)
+        t_s = (k - 1) * self.dt_ns * 1e-9
+        self._update_forces(t_s)
+        self._update_gyro(t_s)
+
+    def _plan(self) -> None:
+        """Precompute the per-step work of the active forces (the hot path of S3):
+        per frame, the direction setters and (m g A, 2 pi f, t_on, phase, periodic, axis)."""
+        by_frame: dict[str, list] = {}
+        for d, t_on in self._active.values():
+            if d.type == "force":
+                periodic = d.frequency_hz > 0
+                by_frame.setdefault(d.frame, []).append(
+                    (self.mass_kg * G0_M_S2 * d.amplitude_g, _TWO_PI * d.frequency_hz, t_on,
+                     math.radians(d.phase_deg), periodic, tuple(float(a) for a in d.axis)))
+        handles = {"ned": self.fdm.h_dist_ned, "frd": self.fdm.h_dist_frd}
+        self._force_plan = [(tuple(h.set_double_value for h in handles[f][1:]), items)
+                            for f, items in by_frame.items()]
+        self._force_frames = set(by_frame)
 
     def update(self, k: int) -> None:
         """Per step while continuous: forces at the step's start time, gyro ramps."""
         t_s = (k - 1) * self.dt_ns * 1e-9
         if self._forces:
-            acc = {"ned": [0.0, 0.0, 0.0], "frd": [0.0, 0.0, 0.0]}
-            for d, t_on in self._active.values():
-                if d.type != "force":
-                    continue
-                if d.frequency_hz > 0:
-                    s = math.sin(_TWO_PI * d.frequency_hz * (t_s - t_on) + math.radians(d.phase_deg))
-                else:
-                    s = 1.0
-                f_n = self.mass_kg * G0_M_S2 * d.amplitude_g * s
-                v = acc[d.frame]
-                for j in range(3):
-                    v[j] += f_n * d.axis[j]
-            for frame, v in acc.items():
-                self.fdm.set_dist_force(frame, 1.0, v)
+            self._update_forces(t_s)
+        if self._ramps:
+            self._update_gyro(t_s)
+
+    def _update_forces(self, t_s: float) -> None:
+        # The external force keeps a 1 N magnitude (set at start); the summed force
+        # vector [N] goes into its direction: three writes per frame in use.
+        sin = math.sin
+        for (sx, sy, sz), items in self._force_plan:
+            x = y = z = 0.0
+            for c, w, t_on, phase, periodic, (ax, ay, az) in items:
+                f_n = c * (sin(w * (t_s - t_on) + phase) if periodic else 1.0)
+                x += f_n * ax
+                y += f_n * ay
+                z += f_n * az
+            sx(x)
+            sy(y)
+            sz(z)
+
+    def _update_gyro(self, t_s: float) -> None:
         gyro = [0.0, 0.0, 0.0]
         ramping = False
         for d, t_on in self._active.values():
