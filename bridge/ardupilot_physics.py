@@ -24,6 +24,12 @@ they reach our FC, so Table 1 compares the controllers under the same sensors.
 Keep SITL's own SIM_ACC*/SIM_GYR* noise at 0 so it is not added twice.
 Position, velocity and attitude are truth: SITL builds its GPS, baro and
 compass from them with its own models (our baro/mag/GNSS records are not sent).
+
+Timing: the server passes each packet's arrival time to `handle` and calls
+`sent` once the reply is out; the sink then gets one timing(...) call per
+stepped packet: PWM time [sim ns], arrival, physics step done and reply sent
+[monotonic wall ns], and the wall interval since the previous stepped packet
+(SITL's frame period; 0 for the first). Duplicates are answered, not timed.
 """
 
 from __future__ import annotations
@@ -60,7 +66,8 @@ class ArduPilotPhysics:
     """Protocol state around a Simulator.
 
     make_sim: () -> Simulator, called at start and at every SITL restart.
-    sink: optional object with step(records, pwm_record, sim) (the run log).
+    sink: optional object with step(records, pwm_record, sim) (the run log) and
+    timing(sim_ns, rx_wall_ns, done_wall_ns, tx_wall_ns, period_ns).
     """
 
     def __init__(self, make_sim, sink=None, note=None):
@@ -80,14 +87,18 @@ class ArduPilotPhysics:
         self._pwm = np.zeros(1, dtype=PWM_DTYPE)
         self._pwm["kind"] = Kind.PWM
         self._pwm["channel_count"] = apj.MOTORS
+        self._rx_ns = 0            # arrival of the packet being handled [wall ns]
+        self._prev_rx_ns = 0       # arrival of the previous stepped packet
+        self._timing = None        # the last step's timing, until its reply is sent
 
     @property
     def physics_hz(self) -> float:
         return _NS / self.sim.dt_ns
 
-    def handle(self, data: bytes, source=None) -> bytes:
-        """One datagram -> the reply to send back to its source."""
+    def handle(self, data: bytes, source=None, rx_wall_ns: int = 0) -> bytes:
+        """One datagram -> the reply to send back to its source (then call `sent`)."""
         pkt = apj.decode_servo_packet(data, source)
+        self._rx_ns = rx_wall_ns
         self.packets += 1
         if self.sitl_rate_hz != pkt.frame_rate_hz:
             self.sitl_rate_hz = pkt.frame_rate_hz
@@ -154,7 +165,18 @@ class ArduPilotPhysics:
             p["fc_step_seq"] = pkt.frame_count & 0xFFFFFFFF
             p["imu_sim_ns"] = applied_ns
             self.sink.step(recs, p, sim)
+            rx = self._rx_ns
+            period = rx - self._prev_rx_ns if self._prev_rx_ns and rx else 0
+            self._prev_rx_ns = rx
+            self._timing = (applied_ns, rx, time.monotonic_ns(), period)
         return reply
+
+    def sent(self, tx_wall_ns: int) -> None:
+        """The reply of the last handled packet left at tx_wall_ns: log its timing."""
+        t = self._timing
+        if t is not None:
+            self._timing = None
+            self.sink.timing(t[0], t[1], t[2], tx_wall_ns, t[3])
 
     def stats(self) -> dict:
         return {"packets": self.packets, "steps": self.steps, "duplicates": self.duplicates,

@@ -102,8 +102,10 @@ class JsonPhysicsServer:
                         f"s at sim time {phys.sim.sim_ns / _NS:.3f} s: did it crash or was it "
                         "stopped? Check its console output") from None
                 continue
-            last_rx = time.monotonic()
-            sock.sendto(phys.handle(data, src), src)
+            rx_ns = time.monotonic_ns()
+            last_rx = rx_ns * 1e-9
+            sock.sendto(phys.handle(data, src, rx_ns), src)
+            phys.sent(time.monotonic_ns())
             if phys.sim.crashed:
                 stopped_by = "crash"
                 break

@@ -3,13 +3,17 @@
 `serve_bridge`: `silbridge bridge --fc ardupilot`: our physics on SITL's JSON
 port for a SITL the user started (and flies from their own GCS).
 `fly_ardupilot`: one benchmark run of `silbridge bench --fc ardupilot`: a
-fresh SITL per run, driven over MAVLink (tools/sitl_ardupilot.py), logged from
-the bridge side (tools/ardupilot_log.py) so tools/metrics.py computes the same
-Table 1 metrics as for our FC.
+fresh SITL per run, driven over MAVLink (tools/sitl_ardupilot.py: GUIDED, arm,
+take off), the scenario's setpoints forwarded to it from take-off on
+(tools/ardupilot_setpoints.py), logged from the bridge side
+(tools/ardupilot_log.py: records, PWM, commanded attitude, JSON-link timing)
+so tools/metrics.py computes the same Table 1 metrics, latency and jitter
+included, as for our FC.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
 import tempfile
@@ -22,6 +26,7 @@ from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 
 from .ardupilot_log import ArduPilotLogSink, AttitudeTarget
+from .ardupilot_setpoints import SetpointForwarder
 from .sitl_ardupilot import (
     MavlinkDriver,
     SitlError,
@@ -40,6 +45,45 @@ BOOT_BUDGET_S = 120.0   # sim seconds SITL may take from boot to an accepted tak
 def _factory(scenario: str, seed, imu_hz):
     sc = load_scenario(scenario, seed=seed)
     return sc, (lambda: Simulator(sc, imu_hz=imu_hz))
+
+
+class BenchStepHooks:
+    """The physics' sink during a bench run: the take-off hand-over, then per step forward the
+    setpoints and log.
+
+    The MAVLink thread only records what happened (`takeoff_sent`: the physics time a
+    MAV_CMD_NAV_TAKEOFF was written; `takeoff_accepted`: its ACK arrived); the physics
+    thread acts on it at its next step, so the log and the forwarder are touched by one
+    thread only, and both take the accepted command's send time as their time 0.
+    """
+
+    def __init__(self, forwarder: SetpointForwarder, log: ArduPilotLogSink):
+        self.forwarder = forwarder
+        self.log = log
+        self.timing = log.timing
+        self._sent_ns: int | None = None     # written by the MAVLink thread
+        self._accepted = False               # written by the MAVLink thread
+        self._pending_ns: int | None = None
+
+    def takeoff_sent(self, sim_ns: int) -> None:
+        self._sent_ns = int(sim_ns)
+
+    def takeoff_accepted(self) -> None:
+        self._accepted = True
+
+    def step(self, recs, pwm, sim) -> None:
+        log = self.log
+        if log.t0_ns is None:
+            sent = self._sent_ns
+            if sent is not None and sent != self._pending_ns:
+                self._pending_ns = sent
+                log.pending_from(sent)
+            if self._accepted and self._pending_ns is not None:
+                self.forwarder.start_at(self._pending_ns)
+                log.start_at(self._pending_ns)
+        # Before the log writes the step, so its status row holds the command just sent.
+        self.forwarder.step(int(pwm["sim_ns"][0]))
+        log.step(recs, pwm, sim)
 
 
 def _summary(sc, sim, res, **extra) -> dict:
@@ -81,18 +125,22 @@ def fly_ardupilot(*, scenario: str, seed, duration_s: float, log_path: str, bina
     defaults_path = os.path.join(workdir, "silbridge-defaults.parm")
     write_defaults(defaults_path, defaults)
     meta = _metadata(sc, sim, phys.physics_hz, duration_s, defaults, binary, speedup)
-    sink = ArduPilotLogSink(log_path, metadata=meta, target=target, duration_s=duration_s)
-    phys.sink = sink
+    driver = MavlinkDriver(instance, takeoff_alt_m=sc.takeoff_alt_m,
+                           sim_time_s=lambda: phys.sim.sim_ns / _NS,
+                           on_takeoff=lambda: hooks.takeoff_accepted(), target=target,
+                           on_takeoff_sent=lambda: hooks.takeoff_sent(phys.sim.sim_ns))
+    forwarder = SetpointForwarder(sc, sim.dt_ns, math.radians(sc.home.heading_deg),
+                                  send=driver.send_attitude_target,
+                                  reported_alt_m=driver.reported_alt_m)
+    sink = ArduPilotLogSink(log_path, metadata=meta, target=target, duration_s=duration_s,
+                            command=forwarder)
+    hooks = phys.sink = BenchStepHooks(forwarder, sink)
     server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(instance)))
-    proc = driver = None
+    proc = None
     t0 = time.monotonic()
     try:
         proc = start_sitl(binary, instance, workdir, speedup=speedup, home=sc.home,
                           defaults_path=defaults_path)
-        driver = MavlinkDriver(instance, takeoff_alt_m=sc.takeoff_alt_m,
-                               sim_time_s=lambda: phys.sim.sim_ns / _NS,
-                               on_takeoff=lambda: sink.start_at(phys.sim.sim_ns),
-                               target=target)
         driver.start()
 
         def stop() -> bool:
@@ -101,18 +149,20 @@ def fly_ardupilot(*, scenario: str, seed, duration_s: float, log_path: str, bina
         res = server.serve(boot_budget_s + duration_s, stop=stop, connect_timeout_s=60.0)
         _raise_if_failed(sink, proc, driver, workdir, boot_budget_s)
     finally:
-        if driver is not None:
+        if driver.is_alive():
             driver.stop()
         if proc is not None:
             stop_sitl(proc)
         server.close()
-        sink.close(fc="ardupilot", takeoff_physics_ns=sink.t0_ns, notes=notes)
+        sink.close(fc="ardupilot", takeoff_physics_ns=sink.t0_ns, notes=notes,
+                   **forwarder.summary())
         if not keep_dir:
             shutil.rmtree(workdir, ignore_errors=True)
     flight_s = (sink.last_sim_ns - sink.t0_ns) / _NS
     return _summary(sc, phys.sim, res, flight_sim_s=flight_s, sim_s_total=res.sim_s,
                     takeoff_physics_s=sink.t0_ns / _NS, log=log_path,
-                    wall_total_s=time.monotonic() - t0) | {"sim_s": flight_s}
+                    wall_total_s=time.monotonic() - t0,
+                    **forwarder.summary()) | {"sim_s": flight_s}
 
 
 def _raise_if_failed(sink, proc, driver, workdir, boot_budget_s) -> None:
@@ -139,6 +189,10 @@ def _metadata(sc, sim, physics_hz, duration_s, defaults, binary, speedup) -> dic
             "duration_s": duration_s, "seed": sc.seed, "transport": "ardupilot-json",
             "processes": 2, "mode": "lockstep", "features_off": [], "fc": "ardupilot",
             "sitl_speedup": speedup,
+            # What two channels mean in this log (tools/ardupilot_log.py, docs/logs.md).
+            "att_target": "scenario command sent to ArduCopter (SET_ATTITUDE_TARGET)",
+            "timing": "JSON link, bridge side: imu_wall_ns = servo packet arrival, "
+                      "consume_wall_ns = physics step done, pwm_wall_ns = reply sent",
         },
         "scenario": sc.to_dict(),
         "params": dict(defaults),

@@ -14,11 +14,14 @@ our vehicle: quad X, 1000..2000 us, our physics rate, our hover throttle and
 thrust curve.
 
 The driver, in its own thread: sends a GCS heartbeat, asks for
-ATTITUDE_TARGET and NAV_CONTROLLER_OUTPUT at 50 Hz (sim time), then every
-2 s of sim time until airborne: GUIDED mode, arm, and once armed
-MAV_CMD_NAV_TAKEOFF to the scenario's take-off altitude. GUIDED then holds
-that position. Arming waits for ArduCopter's own pre-arm checks (GPS, EKF),
-which take some 20-40 s of sim time after boot.
+ATTITUDE_TARGET and NAV_CONTROLLER_OUTPUT at 50 Hz and GLOBAL_POSITION_INT at
+10 Hz (sim time), then every 2 s of sim time until airborne: GUIDED mode, arm,
+and once armed MAV_CMD_NAV_TAKEOFF to the scenario's take-off altitude.
+Arming waits for ArduCopter's own pre-arm checks (GPS, EKF), which take some
+20-40 s of sim time after boot. After the take-off the scenario's setpoints
+are sent by the physics thread (tools/ardupilot_setpoints.py) through
+`send_attitude_target`: every write to the link holds `_tx_lock`, so the two
+threads never interleave bytes or sequence numbers.
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ PORT_STRIDE = 10
 COPTER_MODE_GUIDED = 4
 RETRY_SIM_S = 2.0           # between arming attempts, in sim time (what SITL's checks see)
 STREAM_HZ = 50.0
+POSITION_STREAM_HZ = 10.0   # GLOBAL_POSITION_INT: the altitude the setpoint forwarder reads
 
 HOW_TO_GET = (
     "no ArduCopter SITL binary: give --sitl PATH, set SILBRIDGE_ARDUCOPTER, or put "
@@ -107,6 +111,9 @@ def sitl_defaults(sim, physics_hz: float, overrides: dict | None = None) -> dict
         "MOT_PWM_MAX": 2000,
         "MOT_THST_EXPO": round(expo, 4),
         "MOT_THST_HOVER": round(min(max(sim.hover_throttle, 0.125), 0.6875), 4),
+        # S4 commands tilts up to 35 deg; the default 3000 cdeg (30 deg) would scale them
+        # down (GUIDED angle control limits the lean to ANGLE_MAX in mode_guided.cpp).
+        "ANGLE_MAX": 4500,
     }
     params.update(overrides or {})
     return params
@@ -151,15 +158,16 @@ def sitl_log_tail(workdir: str, lines: int = 8) -> str:
 
 
 class MavlinkDriver(threading.Thread):
-    """GCS over SITL's TCP port: arm, take off, hold; feeds the commanded attitude."""
+    """GCS over SITL's TCP port: GUIDED, arm, take off; reports ArduCopter's target and altitude."""
 
     def __init__(self, instance: int, *, takeoff_alt_m: float, sim_time_s, on_takeoff, target,
-                 connect_timeout_s: float = 30.0):
+                 connect_timeout_s: float = 30.0, on_takeoff_sent=None):
         super().__init__(daemon=True, name=f"sitl-mavlink-{instance}")
         self.addr = ("127.0.0.1", MAVLINK_TCP_BASE + PORT_STRIDE * instance)
         self.takeoff_alt_m = takeoff_alt_m
         self.sim_time_s = sim_time_s
-        self.on_takeoff = on_takeoff
+        self.on_takeoff = on_takeoff                 # () on the ACK that accepts the take-off
+        self.on_takeoff_sent = on_takeoff_sent or (lambda: None)   # () before each one is sent
         self.target = target
         self.connect_timeout_s = connect_timeout_s
         self.codec = mav.MAVLink(self, srcSystem=255, srcComponent=190)
@@ -172,12 +180,32 @@ class MavlinkDriver(threading.Thread):
         self.takeoff_sent = False
         self.took_off = False
         self.sysid = None
+        self.rel_alt_m: float | None = None   # GLOBAL_POSITION_INT relative_alt
         self._halt = threading.Event()
+        self._tx_lock = threading.Lock()
 
-    # pymavlink "file" interface: the codec writes here
+    # pymavlink "file" interface: the codec writes here (always under _tx_lock)
     def write(self, buf: bytes) -> None:
         if self.sock is not None:
             self.sock.sendall(buf)
+
+    def reported_alt_m(self) -> float | None:
+        return self.rel_alt_m
+
+    def send_attitude_target(self, time_boot_ms: int, q_wxyz, thrust: float,
+                             type_mask: int) -> bool:
+        """SET_ATTITUDE_TARGET to the vehicle; from any thread. False if the link is not up."""
+        if self.sock is None or self.sysid is None or self.error is not None:
+            return False
+        try:
+            with self._tx_lock:
+                self.codec.set_attitude_target_send(
+                    int(time_boot_ms) & 0xFFFFFFFF, self.sysid, 1, type_mask,
+                    [float(v) for v in q_wxyz], 0.0, 0.0, 0.0, float(thrust))
+        except OSError as e:   # the run stops on driver.error, as for the driver's own sends
+            self.error = f"sending SET_ATTITUDE_TARGET failed: {e.strerror or e}"
+            return False
+        return True
 
     def stop(self) -> None:
         self._halt.set()
@@ -209,7 +237,8 @@ class MavlinkDriver(threading.Thread):
 
     def _command(self, command: int, *params) -> None:
         p = list(params) + [0.0] * (7 - len(params))
-        self.codec.command_long_send(self.sysid or 1, 1, command, 0, *p)
+        with self._tx_lock:
+            self.codec.command_long_send(self.sysid or 1, 1, command, 0, *p)
 
     def _loop(self) -> None:
         next_beat = 0.0
@@ -218,7 +247,9 @@ class MavlinkDriver(threading.Thread):
         while not self._halt.is_set():
             now = time.monotonic()
             if now >= next_beat:
-                self.codec.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+                with self._tx_lock:
+                    self.codec.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID,
+                                              0, 0, 0)
                 next_beat = now + 1.0
             r, _, _ = select.select([self.sock], [], [], 0.02)
             if r:
@@ -233,6 +264,8 @@ class MavlinkDriver(threading.Thread):
                 for msg_id in (mav.MAVLINK_MSG_ID_ATTITUDE_TARGET,
                                mav.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT):
                     self._command(mav.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / STREAM_HZ)
+                self._command(mav.MAV_CMD_SET_MESSAGE_INTERVAL,
+                              mav.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 1e6 / POSITION_STREAM_HZ)
                 streams_asked = True
             if self.took_off:
                 continue
@@ -246,6 +279,7 @@ class MavlinkDriver(threading.Thread):
             elif not self.armed:
                 self._command(mav.MAV_CMD_COMPONENT_ARM_DISARM, 1)
             else:
+                self.on_takeoff_sent()
                 self._command(mav.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0,
                               self.takeoff_alt_m)
                 self.takeoff_sent = True
@@ -260,6 +294,8 @@ class MavlinkDriver(threading.Thread):
             self.mode = m.custom_mode
         elif kind == "ATTITUDE_TARGET":
             self.target.set(*euler_from_quat(*m.q), SOURCE_ATTITUDE_TARGET)
+        elif kind == "GLOBAL_POSITION_INT":
+            self.rel_alt_m = m.relative_alt * 1e-3
         elif kind == "NAV_CONTROLLER_OUTPUT":
             self.target.set(math.radians(m.nav_roll), math.radians(m.nav_pitch),
                             math.radians(m.nav_bearing), SOURCE_NAV_CONTROLLER)

@@ -2,13 +2,15 @@
 
 Always run: the skip path without a binary (exit 0, says how to get one), the
 `bridge --fc ardupilot` command against a fake SITL, the bridge-side log of an
-ArduCopter flight through the real integrity check and metrics, the SITL
-defaults, the MAVLink driver (GUIDED, arm, take-off, commanded attitude)
-against a fake ArduCopter MAVLink port, and whole bench runs with a stand-in
-`arducopter` executable (fake_arducopter.py: same command line, ports and
-protocols, a plain altitude hold). With SILBRIDGE_ARDUCOPTER pointing at
-an arducopter binary, an end-to-end run arms, takes off and hovers for 30 s of
-sim time on our physics.
+ArduCopter flight (setpoints forwarded, JSON link timed) through the real
+integrity check and metrics, the setpoint forwarder's altitude and retry
+rules, the SITL defaults, the MAVLink driver (GUIDED, arm, take-off, reported
+target and altitude, SET_ATTITUDE_TARGET from another thread) against a fake
+ArduCopter MAVLink port, and whole bench runs with a stand-in `arducopter`
+executable (fake_arducopter.py: same command line, ports and protocols, a
+plain altitude hold, a report of the SET_ATTITUDE_TARGET it received). With
+SILBRIDGE_ARDUCOPTER pointing at an arducopter binary, an end-to-end run
+arms, takes off and hovers for 30 s of sim time on our physics.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
@@ -30,7 +33,9 @@ from silbridge.bridge import ardupilot_json as apj
 from silbridge.bridge.ardupilot_physics import ArduPilotPhysics
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
+from silbridge.tools.ardupilot_flight import BenchStepHooks
 from silbridge.tools.ardupilot_log import SOURCE_ATTITUDE_TARGET, ArduPilotLogSink, AttitudeTarget
+from silbridge.tools.ardupilot_setpoints import SetpointForwarder, thrust_for_climb
 from silbridge.tools.integrity import check_log
 from silbridge.tools.mcap_log import read_log
 from silbridge.tools.metrics import Windows, compute_metrics
@@ -109,38 +114,117 @@ def test_bridge_command_serves_a_fake_sitl():
     assert summary["sim_s"] == pytest.approx(0.2)
 
 
-def test_bridge_side_log_passes_integrity_and_gives_metrics(tmp_path):
-    """Physics + log sink as a bench run uses them, fed by servo packets: log from take-off."""
-    sc = load_scenario("S1")
+def _short_s4(start_s: float = 1.0):
+    """S4 with one roll doublet from start_s (amplitude and hold drawn from S4's seed)."""
+    return load_scenario("S4", overrides={"setpoint[0].start_s": start_s, "setpoint[0].repeat": 1,
+                                          "setpoint[1].start_s": 60.0, "setpoint[1].repeat": 1})
+
+
+def _roll_pitch_yaw(q):
+    from silbridge.bridge.ardupilot_physics import euler_from_quat
+    return euler_from_quat(*q)
+
+
+def test_bridge_side_log_forwards_the_profile_and_logs_timing(tmp_path):
+    """Physics + forwarder + log sink as a bench run wires them, fed by servo packets the
+    way the UDP server feeds them (arrival time in, `sent` after the reply)."""
+    sc = _short_s4()
+    amp_rad = math.radians(sc.setpoints[0].amplitude_deg[0])
     target = AttitudeTarget()
-    path = tmp_path / "ap.mcap"
+    sent, alt = [], {"m": None}
     phys = ArduPilotPhysics(lambda: Simulator(sc))
+    fwd = SetpointForwarder(sc, phys.sim.dt_ns, math.radians(sc.home.heading_deg),
+                            send=lambda *a: sent.append((phys.sim.sim_ns, *a)) or True,
+                            reported_alt_m=lambda: alt["m"])
     meta = {"config": {"imu_hz": phys.sim.imu_hz, "pwm_hz": 1000.0, "physics_hz": 1000.0,
                        "baro_hz": sc.baro_hz, "mag_hz": sc.mag_hz, "gnss_hz": sc.gnss_hz,
-                       "duration_s": 2.0, "seed": sc.seed},
+                       "duration_s": 2.5, "seed": sc.seed},
             "params": {"MOT_PWM_MIN": 1000, "MOT_PWM_MAX": 2000}}
-    sink = ArduPilotLogSink(path, metadata=meta, target=target, duration_s=2.0)
-    phys.sink = sink
+    path = tmp_path / "ap.mcap"
+    sink = ArduPilotLogSink(path, metadata=meta, target=target, duration_s=2.5, command=fwd)
+    hooks = phys.sink = BenchStepHooks(fwd, sink)
     frame = 0
     while not sink.done:
         frame += 1
-        if frame == 500:
-            sink.start_at(phys.sim.sim_ns)       # "take-off accepted" at 0.5 s
-        if frame == 800:
+        if frame in (300, 500):                   # take-off commands sent at 0.299, 0.499 s
+            hooks.takeoff_sent(phys.sim.sim_ns)
+        if frame == 620:                          # the second one's ACK read 0.12 s later
+            hooks.takeoff_accepted()
+        if frame == 800:                          # ArduCopter reports the take-off altitude
+            alt["m"] = sc.takeoff_alt_m + 0.2
             target.set(0.02, -0.01, 0.0, SOURCE_ATTITUDE_TARGET)
-        phys.handle(apj.encode_servo_packet(frame, [1400, 1400, 1400, 1400]))
+        phys.handle(apj.encode_servo_packet(frame, [1400] * 4), None, time.monotonic_ns())
+        phys.sent(time.monotonic_ns())
     sink.close()
+    t0 = 499_000_000                              # the physics time of the take-off command
+    # Nothing is sent during the take-off; from the reported altitude on, at >= 20 Hz.
+    assert fwd.engaged_by == "altitude" and fwd.engaged_ns == pytest.approx(0.3e9, abs=2e6)
+    times = np.array([s[0] for s in sent]) - t0
+    assert times[0] == pytest.approx(0.3e9, abs=2e6) and np.diff(times).max() <= 50_000_000
+    assert all(s[3] == 0.5 and s[4] == 0b111 for s in sent)   # hold altitude; rates ignored
+    q = np.array([s[2] for s in sent])
+    assert np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-6)
+    rolls = np.array([_roll_pitch_yaw(qi)[0] for qi in q])
+    assert rolls.max() == pytest.approx(amp_rad, abs=1e-6)   # the doublet's +A went out
+    assert rolls[times < 1.0e9].max() == 0.0                   # and not before its start
+    # While the roll ramps (0.5 s), every 20 ms setpoint step is sent at once.
+    ramp = (times > 1.0e9) & (times < 1.5e9)
+    assert np.diff(times[ramp]).max() <= 21_000_000
+
     log = read_log(path)
     assert check_log(log) == []
+    # Time 0 is the accepted command's send, not its ACK: the steps between were held.
+    assert sink.t0_ns == t0 and log.events[0]["fields"]["physics_sim_ns"] == t0
     st = log.channels["/fc/status"]
-    assert st["sim_ns"][0] == 0 and len(st) == 2000
+    assert st["sim_ns"][0] == 0 and len(st) == 2500 and (np.diff(st["sim_ns"]) == 1e6).all()
+    assert len(log.channels["/pwm"]) == 2500 and log.channels["/imu"]["sim_ns"][0] >= 0
     assert "/setpoint" not in log.channels
-    assert log.channels["/pwm"]["pwm_us"][:, :4].min() == 1400
-    m = compute_metrics(log, Windows(warmup=(0, 0.5), transient=(0.5, 1.0), analysis=(1.0, 2.0),
-                                     yaw=(1.5, 2.0)))
-    # On the ground the attitude is level: the error is the commanded 2.2 deg.
-    assert m["att_rms_deg"] == pytest.approx(math.degrees(math.hypot(0.02, 0.01)), abs=0.3)
-    assert m["pwm_pp_us"] == 0.0 and m["sat_pct"] == 0.0
+    # The metrics' command is what was sent, on the physics clock.
+    assert st["att_target_rad"][:, 0].max() == pytest.approx(amp_rad, rel=1e-6)
+    i_ramp = np.searchsorted(st["sim_ns"], int(1.25e9))
+    assert st["att_target_rad"][i_ramp, 0] == pytest.approx(amp_rad / 2, abs=0.03)
+    assert st["forwarding"][:299].max() == 0 and st["forwarding"][301:].min() == 1
+    assert np.isnan(st["ap_target_rad"][:299]).all()            # nothing reported yet
+    assert st["ap_target_rad"][-1, 0] == pytest.approx(0.02) and st["target_source"][-1] == 1
+    m = compute_metrics(log, Windows(warmup=(0, 0.5), transient=(0.5, 1.0),
+                                     analysis=(1.0, 2.5), yaw=(2.0, 2.5)))
+    # The vehicle stays level on the ground: the error is the command itself.
+    win = (st["sim_ns"] >= 1.0e9) & (st["sim_ns"] <= 2.5e9)
+    cmd_deg = np.degrees(np.hypot(st["att_target_rad"][win, 0], st["att_target_rad"][win, 1]))
+    assert m["att_rms_deg"] == pytest.approx(np.sqrt(np.mean(cmd_deg ** 2)), abs=0.3)
+    # One /timing row per servo packet: physics latency and SITL's frame period.
+    tim = log.channels["/timing"]
+    assert len(tim) == 2500 and tim["sim_ns"][0] == 0
+    assert (tim["pwm_wall_ns"] >= tim["consume_wall_ns"]).all()
+    assert (tim["consume_wall_ns"] >= tim["imu_wall_ns"]).all()
+    assert (tim["loop_period_ns"][1:] > 0).all()
+    assert 0 < m["latency_ms"] < 50 and math.isfinite(m["jitter_ms"])
+    assert m["loop_period_ms"] > m["latency_ms"]
+
+
+def test_forwarder_flies_altitude_through_the_thrust_field():
+    sc = load_scenario("S1")
+    sent, alt = [], {"m": None}
+    fwd = SetpointForwarder(sc, 1_000_000, 0.0, send=lambda *a: sent.append(a) or True,
+                            reported_alt_m=lambda: alt["m"])
+    fwd.step(5_000_000)                      # before take-off: nothing
+    fwd.start_at(5_000_000)
+    for k in range(1, 3000):                 # no report, profile constant: wait
+        fwd.step(5_000_000 + k * 1_000_000)
+    assert not sent and not fwd.engaged
+    alt["m"] = sc.takeoff_alt_m - 0.45      # inside the engage margin, outside the deadband
+    fwd.step(5_000_000 + 3000 * 1_000_000)
+    assert fwd.engaged_by == "altitude"
+    assert sent[-1][2] == pytest.approx(0.5 + 0.5 * 0.5 * 0.45 / 2.5)   # climb 0.225 m/s
+    assert thrust_for_climb(0.0) == 0.5 and thrust_for_climb(10.0) == 1.0
+    assert thrust_for_climb(-0.75) == pytest.approx(0.25) and thrust_for_climb(-9.0) == 0.0
+    # A link that is not up yet: counted, retried at the next step, not every 50 ms.
+    fails = SetpointForwarder(sc, 1_000_000, 0.0, send=lambda *a: False,
+                              reported_alt_m=lambda: None)
+    fails.start_at(0)
+    for k in range(1, 10_003):
+        fails.step(k * 1_000_000)
+    assert fails.engaged_by == "timeout" and fails.refused == 3 and fails.sent == 0
 
 
 def test_sitl_defaults_match_our_quad_x(tmp_path):
@@ -148,6 +232,7 @@ def test_sitl_defaults_match_our_quad_x(tmp_path):
     d = sitl_defaults(sim, 1000.0, {"ATC_RAT_RLL_P": 0.12})
     assert d["FRAME_CLASS"] == 1 and d["FRAME_TYPE"] == 1 and d["SIM_RATE_HZ"] == 1000
     assert (d["MOT_PWM_MIN"], d["MOT_PWM_MAX"]) == (1000, 2000)
+    assert d["ANGLE_MAX"] >= 3500          # S4's 35 deg tilts are not scaled down
     assert d["MOT_THST_HOVER"] == pytest.approx(sim.hover_throttle, abs=1e-4)
     write_defaults(str(tmp_path / "d.parm"), d)
     lines = (tmp_path / "d.parm").read_text().splitlines()
@@ -166,6 +251,7 @@ class FakeArduCopter(threading.Thread):
         self.port = self.listener.getsockname()[1]
         self.mode, self.armed, self.takeoff_alt = 0, False, None
         self.intervals = {}
+        self.attitude_targets = []
         self.stop = threading.Event()
 
     def write(self, buf):
@@ -185,6 +271,7 @@ class FakeArduCopter(threading.Thread):
                 if self.takeoff_alt is not None:
                     codec.attitude_target_send(0, 0, [math.cos(0.05), math.sin(0.05), 0, 0],
                                                0, 0, 0, 0.5)
+                    codec.global_position_int_send(0, 0, 0, 0, 9_750, 0, 0, 0, 0)
                 next_beat = time.monotonic() + 0.05
             try:
                 data = self.conn.recv(4096)
@@ -193,6 +280,8 @@ class FakeArduCopter(threading.Thread):
             if not data:
                 return
             for m in codec.parse_buffer(data) or []:
+                if m.get_type() == "SET_ATTITUDE_TARGET":
+                    self.attitude_targets.append(m)
                 if m.get_type() != "COMMAND_LONG":
                     continue
                 if m.command == mav.MAV_CMD_DO_SET_MODE:
@@ -225,7 +314,15 @@ def test_mavlink_driver_sets_guided_arms_takes_off_and_reads_the_target():
     try:
         assert took_off.wait(10), f"no take-off: {drv.error} mode={fake.mode} armed={fake.armed}"
         deadline = time.monotonic() + 5
-        while target.get()[1] != SOURCE_ATTITUDE_TARGET and time.monotonic() < deadline:
+        while (target.get()[1] != SOURCE_ATTITUDE_TARGET or drv.reported_alt_m() is None) \
+                and time.monotonic() < deadline:
+            time.sleep(0.01)
+        # The physics thread's sends share the link with the driver's own (one lock).
+        q = (math.cos(0.1), math.sin(0.1), 0.0, 0.0)
+        for k in range(20):
+            assert drv.send_attitude_target(1000 + k, q, 0.5, 0b111)
+        deadline = time.monotonic() + 5
+        while len(fake.attitude_targets) < 20 and time.monotonic() < deadline:
             time.sleep(0.01)
     finally:
         drv.stop()
@@ -235,6 +332,12 @@ def test_mavlink_driver_sets_guided_arms_takes_off_and_reads_the_target():
     assert fake.intervals[mav.MAVLINK_MSG_ID_ATTITUDE_TARGET] == pytest.approx(20000)
     (roll, pitch, _), source = target.get()
     assert source == SOURCE_ATTITUDE_TARGET and roll == pytest.approx(0.1, abs=1e-6)
+    assert drv.reported_alt_m() == pytest.approx(9.75)
+    assert fake.intervals[mav.MAVLINK_MSG_ID_GLOBAL_POSITION_INT] == pytest.approx(100000)
+    got = fake.attitude_targets
+    assert [m.time_boot_ms for m in got] == list(range(1000, 1020))
+    assert all(m.type_mask == 0b111 and m.thrust == 0.5 and m.target_system == 1 for m in got)
+    assert got[0].q[1] == pytest.approx(math.sin(0.1))
 
 
 @pytest.mark.skipif(not os.environ.get("SILBRIDGE_ARDUCOPTER"),
@@ -253,8 +356,37 @@ def test_arducopter_arms_takes_off_and_hovers_30_s(tmp_path):
     log = read_log(spec.log_path)
     nav = log.channels["/gt_nav"]
     alt_m = -nav["pos_ned_m"][nav["sim_ns"] >= 20e9][:, 2]
-    assert abs(alt_m.mean() - 10.0) < 1.0        # GUIDED holds the take-off altitude
+    assert abs(alt_m.mean() - 10.0) < 1.0        # thrust 0.5 holds the take-off altitude
     assert math.isfinite(r.metrics["att_rms_deg"]) and r.metrics["att_rms_deg"] < 5.0
+    # The level command went out once ArduCopter reported the take-off altitude, and it
+    # answered with its own target; the JSON link was timed.
+    assert r.summary["forwarding_started_by"] == "altitude" and r.summary["setpoints_sent"] > 100
+    st = log.channels["/fc/status"]
+    assert (st["target_source"][st["sim_ns"] >= 20e9] == SOURCE_ATTITUDE_TARGET).all()
+    assert math.isfinite(r.metrics["latency_ms"]) and math.isfinite(r.metrics["jitter_ms"])
+
+
+@pytest.mark.skipif(not os.environ.get("SILBRIDGE_ARDUCOPTER"),
+                    reason="set SILBRIDGE_ARDUCOPTER to an arducopter SITL binary to fly S4's "
+                           "doublets end to end (none on this machine)")
+def test_arducopter_flies_the_s4_roll_doublet(tmp_path):
+    from silbridge.tools.campaign import make_specs, run_one
+
+    spec = make_specs(["S4"], 1, 17.0, tmp_path, fc="ardupilot", sitl=find_arducopter(),
+                      variant="ardupilot",
+                      windows=((0.0, 10.0), (10.0, 17.0), (10.0, 17.0), (10.0, 17.0)))[0]
+    r = run_one(spec)
+    assert r.problems == [] and not r.summary["crashed"]
+    assert r.summary["forwarding_started_by"] == "altitude"
+    amp_rad = math.radians(load_scenario("S4", seed=spec.seed).setpoints[0].amplitude_deg[0])
+    log = read_log(spec.log_path)
+    st = log.channels["/fc/status"]
+    assert st["att_target_rad"][:, 0].max() == pytest.approx(amp_rad, rel=1e-5)
+    # ArduCopter's own (shaped) target and the true roll follow the command.
+    assert np.nanmax(st["ap_target_rad"][:, 0]) > 0.8 * amp_rad
+    from silbridge.tools.metrics import roll_pitch_from_quat
+    roll, _ = roll_pitch_from_quat(log.channels["/gt_att"]["q_wxyz"])
+    assert roll.max() > 0.7 * amp_rad and roll.min() < -0.7 * amp_rad
 
 
 @pytest.fixture
@@ -284,6 +416,56 @@ def test_bench_run_with_a_stand_in_sitl_logs_from_take_off(tmp_path, fake_sitl_b
     up_m = -log.channels["/gt_nav"]["pos_ned_m"][:, 2]
     assert up_m[0] < 0.2 and up_m.max() > 2.0           # it left the ground under our physics
     assert math.isfinite(r.metrics["att_rms_deg"]) and math.isfinite(r.metrics["pwm_pp_us"])
+
+
+def test_bench_run_forwards_the_s4_doublet_to_the_stand_in(tmp_path, fake_sitl_binary,
+                                                          monkeypatch):
+    """S4's roll doublet, moved to 2 s after take-off, reaches the stand-in ArduCopter as
+    SET_ATTITUDE_TARGET at >= 10 Hz of sim time, GUIDED, rates ignored, thrust = hold; the
+    log scores the command we sent and times the JSON link."""
+    from silbridge.tools.campaign import make_specs, run_one
+
+    text = (Path(apj.__file__).parent / "scenarios" / "S4.toml").read_text()
+    text = text.replace("start_s = 10.0", "start_s = 2.0").replace("repeat = 6", "repeat = 1")
+    text = text.replace("start_s = 20.0", "start_s = 60.0").replace("repeat = 5", "repeat = 1")
+    path = tmp_path / "S4short.toml"
+    path.write_text(text)
+    report = tmp_path / "fake_report.json"
+    monkeypatch.setenv("FAKE_ARDUCOPTER_REPORT", str(report))
+    spec = make_specs([str(path)], 1, 7.0, tmp_path, fc="ardupilot", sitl=fake_sitl_binary,
+                      variant="ardupilot",
+                      windows=((0.0, 2.0), (2.0, 3.0), (2.0, 7.0), (6.0, 7.0)))[0]
+    r = run_one(spec)
+    sp = load_scenario(str(path), seed=spec.seed).setpoints[0]
+    amp_rad, hold_s = math.radians(sp.amplitude_deg[0]), sp.hold_s[0]
+    assert r.problems == [] and not r.summary["crashed"]
+    takeoff_s = r.summary["takeoff_physics_s"]
+    # Forwarding starts at take-off altitude or, at the latest, with the doublet's first step.
+    assert r.summary["setpoints_sent"] > 100 and r.summary["forwarding_from_s"] <= 2.021
+
+    got = json.loads(report.read_text())
+    assert got["refused"] == [] and got["timeouts"] == 0 and got["not_guided"] == 0
+    rows = np.array(got["set_attitude_target"])
+    t_s = rows[:, 0] - takeoff_s                 # flight time at the stand-in's arrival
+    assert t_s[0] >= 0.0 and np.diff(t_s).max() <= 0.1          # >= 10 Hz of sim time
+    assert (rows[:, 6] == 0b111).all() and (rows[:, 7:9] == 1).all()
+    assert np.abs(rows[:, 5] - 0.5).max() <= 0.3                 # climb-rate commands
+    roll = np.array([_roll_pitch_yaw(q)[0] for q in rows[:, 1:5]])
+    assert roll.max() == pytest.approx(amp_rad, abs=1e-4)
+    assert np.abs(roll[t_s < 2.0]).max(initial=0.0) < 1e-6
+    at_top = t_s[roll > amp_rad - 1e-4]
+    assert at_top.min() == pytest.approx(2.5, abs=0.01)          # the 0.5 s ramp's end
+    assert at_top.max() == pytest.approx(2.5 + hold_s, abs=0.06)
+
+    log = read_log(spec.log_path)
+    st = log.channels["/fc/status"]
+    assert st["att_target_rad"][:, 0].max() == pytest.approx(amp_rad, rel=1e-5)
+    assert np.nanmax(st["ap_target_rad"][:, 0]) == pytest.approx(amp_rad, abs=1e-4)  # echo
+    tim = log.channels["/timing"]
+    assert len(tim) == len(log.channels["/pwm"]) == 7000
+    for key in ("latency_ms", "latency_p99_ms", "jitter_ms", "loop_period_ms"):
+        assert math.isfinite(r.metrics[key]) and r.metrics[key] >= 0.0, key
+    assert r.metrics["loop_period_ms"] > r.metrics["latency_ms"] > 0.0
 
 
 def test_bench_cli_puts_both_controllers_in_one_table(tmp_path, fake_sitl_binary):
