@@ -8,6 +8,11 @@ figure is the best of `--reps` timed runs of `--steps` steps, timed with the
 thread's CPU clock (time.thread_time), so other processes competing for the
 cores do not inflate it; JSBSim's run() alone on the same state is timed the
 same way for reference. Bounded: at most reps x steps steps per rate.
+
+`--paced` also times single steps the way real time runs them, one per 1 ms of wall
+clock (the bridge's Pacer: sleep, then spin), against back-to-back steps: on a shared VM
+a step that waited a millisecond runs with cold caches and takes several times longer,
+which is where real-time loop jitter comes from (README, "What is measured").
 """
 
 from __future__ import annotations
@@ -45,21 +50,53 @@ def bench(imu_hz: int, steps: int, reps: int, scenario: str = "S1") -> dict:
             "realtime_factor": sim.dt_s / best, "imu_samples_per_s": imu_hz * sim.dt_s / best}
 
 
+def bench_paced(steps: int = 2000, scenario: str = "S1") -> dict:
+    """Wall time of single steps back to back and paced at 1 kHz (percentiles, us)."""
+    import numpy as np
+
+    from silbridge.bridge.pacing import Pacer
+    sc = load_scenario(scenario, overrides={"home.initial_agl_m": 20.0})
+    sim = Simulator(sc)
+    pwm = (sim.hover_pwm_us,) * 4
+    for _ in range(200):
+        sim.step(pwm)
+    out = {}
+    for name in ("back_to_back", "paced_1khz"):
+        pacer = Pacer(sim.dt_ns) if name == "paced_1khz" else None
+        d = np.empty(steps)
+        for k in range(steps):
+            if pacer is not None:
+                pacer.wait_for_step(k + 1)
+            t0 = time.perf_counter_ns()
+            sim.step(pwm)
+            d[k] = time.perf_counter_ns() - t0
+        p = np.percentile(d / 1e3, (50, 90, 99))
+        out[name] = {"p50": float(p[0]), "p90": float(p[1]), "p99": float(p[2])}
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--imu", type=int, nargs="+", default=[1000, 8000, 32000])
     ap.add_argument("--steps", type=int, default=4000)
     ap.add_argument("--reps", type=int, default=5)
+    ap.add_argument("--paced", action="store_true",
+                    help="also time steps paced at 1 kHz against back-to-back steps")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     rows = [bench(hz, args.steps, args.reps) for hz in args.imu]
+    paced = bench_paced() if args.paced else None
     if args.json:
-        print(json.dumps({"bench": "bridge.step", "results": rows}))
+        print(json.dumps({"bench": "bridge.step", "results": rows, "paced_us": paced}))
     else:
         print(f"{'imu_hz':>8} {'us/step':>9} {'run() us':>9} {'bridge us':>10} {'x realtime':>11}")
         for r in rows:
             print(f"{r['imu_hz']:>8} {r['us_per_step']:>9.2f} {r['jsbsim_run_us']:>9.2f} "
                   f"{r['bridge_overhead_us']:>10.2f} {r['realtime_factor']:>11.1f}")
+        if paced:
+            for name, p in paced.items():
+                print(f"one step, {name.replace('_', ' ')}: p50 {p['p50']:.1f} us, "
+                      f"p90 {p['p90']:.1f} us, p99 {p['p99']:.1f} us (wall)")
     return 0
 
 

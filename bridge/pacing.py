@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import time
 
+from silbridge.shm.timer_slack import set_timer_slack_ns
+
 _NS = 1_000_000_000
 
 
@@ -21,6 +23,7 @@ class Pacer:
             raise ValueError("speed must be > 0")
         self.period_ns = dt_ns / speed
         self.spin_ns = spin_ns
+        set_timer_slack_ns(1)   # exact wake-ups for this thread (shm/timer_slack.py)
         self.start_ns = time.monotonic_ns()
         self.late_steps = 0
         self.max_late_ns = 0

@@ -22,6 +22,7 @@ import numpy as np
 
 from silbridge.shm import Ring
 from silbridge.shm import lockstep as ls
+from silbridge.shm.timer_slack import set_timer_slack_ns
 from silbridge.shm.records import FLAG_STEP_END, RECORD_DTYPE
 
 _NS = 1_000_000_000
@@ -200,6 +201,9 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print) -> dict:
     """
     seg = loop.seg
     dt_ns = seg.word(ls.PHYSICS_DT_NS) or 1_000_000
+    if seg.word(ls.RUN_MODE) == ls.MODE_REALTIME:
+        set_timer_slack_ns(1)   # wake on time when the ring wait sleeps
+
     wait = seg.sensors.wait
     if isinstance(seg.sensors, Ring):   # the shm ring's wait can yield longer; HIL links block
         yield_s = max(2e-4, 2.0 * dt_ns / _NS)
