@@ -1,7 +1,8 @@
 """Barometer, magnetometer and GNSS models (the 10-100 Hz sensors).
 
-Each model is sampled by the simulator on the first physics step at or after
-its due time t_m = round(m * 1e9 / rate_hz) ns, m = 1, 2, ... (`Schedule`).
+Each model is sampled on the first physics step at or after its due time
+t_m = round(m * 1e9 / rate_hz) ns, m = 1, 2, ... (`Schedule`; the step kernel
+keeps the baro's and magnetometer's schedules in C, the simulator the GNSS's).
 Noise comes from one named stream per sensor (noise.NormalRows).
 
 - Baro: static pressure from JSBSim's standard atmosphere (ISA, `atmosphere.py`
@@ -21,7 +22,6 @@ from __future__ import annotations
 import math
 from collections import deque
 
-from silbridge.bridge.frames import ned_to_frd
 from silbridge.bridge.noise import NormalRows
 from silbridge.mavlink import hil_quant
 
@@ -43,8 +43,12 @@ class Schedule:
 
 
 class Baro:
-    """The simulator advances the lag once per physics step, inline on its hot path:
-    filtered_pa += alpha * (pressure_pa - filtered_pa), alpha = 1 - exp(-dt / lag_s)."""
+    """Configuration, schedule and noise stream of the barometer. The step kernel
+    (bridge/step_python.py is its readable reference) runs the lag once per physics
+    step, filtered_pa += alpha * (pressure_pa - filtered_pa), alpha = 1 - exp(-dt /
+    lag_s), and samples pa = filtered + offset + noise_pa * n, put on the grid
+    HIL_SENSOR (float32 hPa) carries exactly, so the FC reads the same pressure over
+    shared memory and over MAVLink."""
 
     def __init__(self, cfg, seed: int, dt_s: float, pressure0_pa: float):
         self.cfg = cfg
@@ -53,25 +57,15 @@ class Baro:
         self.alpha = 1.0 if cfg.lag_s <= 0 else 1.0 - math.exp(-dt_s / cfg.lag_s)
         self.filtered_pa = pressure0_pa
 
-    def sample(self) -> float:
-        pa = self.filtered_pa + self.cfg.offset_pa + self.cfg.noise_pa * self.noise.next_row()[0]
-        # On the grid HIL_SENSOR (float32 hPa) carries exactly, whatever the transport: the FC
-        # then reads the same pressure over shared memory and over MAVLink (same trajectory).
-        return hil_quant.pressure_pa(pa)
-
 
 class Mag:
+    """Configuration, schedule and noise stream of the magnetometer; the step kernel
+    samples field_frd = R(phi, theta, psi) field_ned + offset + noise_gauss * n."""
+
     def __init__(self, cfg, seed: int):
         self.cfg = cfg
         self.schedule = Schedule(cfg.rate_hz)
         self.noise = NormalRows(seed, "mag", 3)
-
-    def sample(self, phi: float, theta: float, psi: float) -> tuple[float, float, float]:
-        bx, by, bz = ned_to_frd(phi, theta, psi, self.cfg.field_ned_gauss)
-        o = self.cfg.offset_gauss
-        n = self.noise.next_row()
-        s = self.cfg.noise_gauss
-        return (bx + o[0] + s * n[0], by + o[1] + s * n[1], bz + o[2] + s * n[2])
 
 
 class Gnss:

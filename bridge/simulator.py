@@ -20,8 +20,8 @@ scenario, seed and PWM sequence give identical record bytes.
 The hot path is one call into the C step kernel (bridge/src/stepmodule.c; its
 readable Python reference is bridge/step_python.py, selectable with
 kernel="python"): it sets the PWM, runs JSBSim, reads the state through the
-property nodes and writes the IMU and ground-truth records. Python keeps what
-happens at 100 Hz or less (baro, mag, GNSS, setpoints, crash messages, noise
+property nodes and writes the IMU, ground-truth, baro and mag records. Python keeps what
+happens at 10 Hz or less or on events (GNSS, setpoints, crash messages, noise
 blocks) and the oversampled IMU block (numpy, imu.py).
 """
 
@@ -149,6 +149,12 @@ class Simulator:
             fdm.h_gear.get_double_value() > 0)
         self.imu.kernel = self.kernel
         self.kernel.set_injected(*self.imu.injected)
+        bc, mc = sc.baro, sc.mag
+        self.kernel.configure_baro(bc.rate_hz, bc.offset_pa, bc.noise_pa, self._get_temp)
+        self.kernel.configure_mag(mc.rate_hz, tuple(mc.field_ned_gauss), tuple(mc.offset_gauss),
+                                  mc.noise_gauss)
+        self.kernel.set_baro_block(self.baro.noise.next_block())
+        self.kernel.set_mag_block(self.mag.noise.next_block())
         if self._scalar_imu:
             self.kernel.set_block(*self.imu.next_scalar_block())
             self._kstep = self.kernel.step
@@ -175,11 +181,11 @@ class Simulator:
     def published_counts(self) -> dict[str, int]:
         """Records published so far per kind (not wrapped)."""
         s = self._seq
-        imu, att, nav = self.kernel.seqs()
+        imu, att, nav, baro, mag = self.kernel.seqs()
         if not self._scalar_imu:
             imu = s[Kind.IMU]
         return {"imu": imu, "gt_att": att, "gt_nav": nav,
-                "baro": s[Kind.BARO], "mag": s[Kind.MAG], "gnss": s[Kind.GNSS],
+                "baro": baro, "mag": mag, "gnss": s[Kind.GNSS],
                 "setpoint": s[Kind.SETPOINT]}
 
     # --- the step ---------------------------------------------------------------------
@@ -209,6 +215,10 @@ class Simulator:
         st = self._state
         if flags & step_py.F_BLOCK_DONE:
             self.kernel.set_block(*self.imu.next_scalar_block())
+        if flags & step_py.F_BARO_BLOCK_DONE:
+            self.kernel.set_baro_block(self.baro.noise.next_block())
+        if flags & step_py.F_MAG_BLOCK_DONE:
+            self.kernel.set_mag_block(self.mag.noise.next_block())
         if flags & step_py.F_GROUND_CHANGED:
             on_ground = st[step_py.ST_ON_GROUND] > 0.0
             self.fdm.set_air_integrator(not on_ground)
@@ -228,24 +238,11 @@ class Simulator:
         return count
 
     def _slow_sensors(self, count: int) -> int:
-        """Baro, mag and GNSS records due at this step, and a changed setpoint."""
+        """GNSS records due at this step, and a changed setpoint (the kernel wrote the
+        baro and mag records)."""
         sim_ns = self.sim_ns
         st = self._state
         buf = self.buffer
-        baro = self.baro
-        if sim_ns >= baro.schedule.next_ns:
-            baro.schedule.advance()
-            baro.filtered_pa = float(st[step_py.ST_BARO_PA])
-            sb.BARO.pack_into(buf.buf, count * 64, 2, 0, self._next_seq(2), sim_ns, 0,
-                              baro.sample(), self._get_temp() / 1.8 - 273.15)
-            count += 1
-        mag = self.mag
-        if sim_ns >= mag.schedule.next_ns:
-            mag.schedule.advance()
-            phi, theta, psi = st[step_py.ST_EULER:step_py.ST_EULER + 3].tolist()
-            bx, by, bz = mag.sample(phi, theta, psi)
-            sb.MAG.pack_into(buf.buf, count * 64, 3, 0, self._next_seq(3), sim_ns, 0, bx, by, bz)
-            count += 1
         gnss = self.gnss
         if sim_ns >= gnss.schedule.next_ns:
             gnss.schedule.advance()
@@ -271,9 +268,8 @@ class Simulator:
         return count
 
     def _update_next_slow(self) -> None:
-        """Tell the kernel the sim time of the next baro/mag/GNSS/setpoint record."""
-        due = [self.baro.schedule.next_ns, self.mag.schedule.next_ns,
-               self.gnss.schedule.next_ns]
+        """Tell the kernel the sim time of the next GNSS or setpoint record."""
+        due = [self.gnss.schedule.next_ns]
         if self.gnss.pending:
             due.append(self.gnss.pending[0][0])
         if self.setpoints.next_step > 0:

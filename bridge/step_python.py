@@ -2,7 +2,7 @@
 
 One physics step: write the four pulse widths into JSBSim, run it, read the state back,
 and write the step's IMU (when one sample per step), GT_ATT and GT_NAV records into the
-step buffer. The C kernel (`silbridge.bridge._step.Kernel`) does the same with the same
+step buffer, then the baro and magnetometer records when due. The C kernel (`silbridge.bridge._step.Kernel`) does the same with the same
 operation order and gives byte-identical records (tests/bridge/test_step_kernel.py); it
 runs in production because this version costs ~4 us more per step. Read this one.
 
@@ -13,7 +13,10 @@ Interface shared by both (the simulator is the only caller):
     flags = k.step_gt(pwm, slot)   # oversampled IMU (written by the caller): GT at slot
     k.set_block(block, temps)      # next IMU noise rows (rows, 6) and temperatures (rows)
     k.set_injected(x, y, z)        # injected gyro bias [rad/s]
-    k.next_slow_ns                 # from this sim time, flags carry F_SLOW_DUE
+    k.configure_baro(rate_hz, offset_pa, noise_pa, get_temp)      # sample the baro (100 Hz)
+    k.configure_mag(rate_hz, field_ned, offset, noise_gauss)      # and the magnetometer
+    k.set_baro_block(normals (rows, 1)); k.set_mag_block(normals (rows, 3))
+    k.next_slow_ns                 # from this sim time, flags carry F_SLOW_DUE (GNSS, setpoints)
 The low byte of flags is the number of records written; the state array receives the
 values in the ST_* slots below. Without F_SLOW_DUE the last record carries STEP_END.
 """
@@ -23,6 +26,8 @@ from __future__ import annotations
 import math
 
 from silbridge.bridge import step_buffer as sb
+from silbridge.bridge.frames import ned_to_frd, quat_from_euler
+from silbridge.mavlink.hil_quant import pressure_pa
 from silbridge.shm.records import FLAG_STEP_END
 
 # Getter order (JSBSim property nodes' get_double_value): rates, forces, Euler, velocity
@@ -39,6 +44,7 @@ ST_ON_GROUND, ST_BARO_PA, ST_TEMP_C, ST_PREV_VD, ST_COS_TILT, ST_COUNT = 19, 20,
 # Flags.
 F_SLOW_DUE, F_BLOCK_DONE, F_GROUND_CHANGED = 0x100, 0x200, 0x400
 F_TIPPED, F_FLIPPED, F_ROTOR_STRIKE = 0x800, 0x1000, 0x2000
+F_BARO_BLOCK_DONE, F_MAG_BLOCK_DONE = 0x4000, 0x8000
 
 _TWO_PI = 2.0 * math.pi
 # Rotor hubs in body FRD [m] (quadx.xml: 0.1591 m along x and y, 0.03 m above the CG).
@@ -47,15 +53,10 @@ ROTOR_HUBS_FRD_M = ((0.1591, 0.1591, -0.03), (-0.1591, -0.1591, -0.03),
 
 
 def quat_from_euler_w_pos(phi: float, theta: float, psi: float) -> tuple:
-    """ZYX Euler -> (w, x, y, z), body FRD -> NED, in the w >= 0 hemisphere."""
-    cr, sr = math.cos(0.5 * phi), math.sin(0.5 * phi)
-    cp, sp = math.cos(0.5 * theta), math.sin(0.5 * theta)
-    cy, sy = math.cos(0.5 * psi), math.sin(0.5 * psi)
-    q = (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-         cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
-    if q[0] < 0.0:   # JSBSim's psi is in [0, 2 pi)
-        q = (-q[0], -q[1], -q[2], -q[3])
-    return q
+    """ZYX Euler -> (w, x, y, z), body FRD -> NED, in the w >= 0 hemisphere (JSBSim's psi
+    is in [0, 2 pi))."""
+    q = quat_from_euler(phi, theta, psi)
+    return (-q[0], -q[1], -q[2], -q[3]) if q[0] < 0.0 else q
 
 
 def quant_down_m(d: float) -> float:
@@ -69,6 +70,32 @@ def quant_velocity_m_s(v: float) -> float:
         return v
     cm = v if math.isinf(v) else float(round(v * 100.0))
     return max(-32767.0, min(32767.0, cm)) / 100.0
+
+
+def due_ns(m: int, rate_hz: float) -> int:
+    """Sample m of a periodic sensor is due at round(m * 1e9 / rate_hz) ns (lowrate.py)."""
+    return int(round(m * 1e9 / rate_hz))
+
+
+class _LowRate:
+    """Schedule and noise of one 100 Hz sensor."""
+
+    def __init__(self, rate_hz: float):
+        if not rate_hz > 0:
+            raise ValueError("rate_hz must be > 0")
+        self.rate_hz, self.m, self.next_ns = rate_hz, 1, due_ns(1, rate_hz)
+        self.noise: list = []
+        self.pos = 0
+        self.seq = 0
+
+    def take(self) -> list:
+        if self.pos >= len(self.noise):
+            raise RuntimeError("no noise: call set_*_block first")
+        self.m += 1
+        self.next_ns = due_ns(self.m, self.rate_hz)
+        row = self.noise[self.pos]
+        self.pos += 1
+        return row
 
 
 def rotor_strike(phi: float, theta: float, hagl_m: float) -> bool:
@@ -130,6 +157,7 @@ class Kernel:
         self.next_slow_ns = 0
         self.injected = [0.0, 0.0, 0.0]
         self._seq = [0, 0, 0]
+        self._baro = self._mag = None
         self._block = None
         self._temps = None
         self.pos = 0
@@ -147,7 +175,26 @@ class Kernel:
         self.injected = [float(x), float(y), float(z)]
 
     def seqs(self) -> tuple:
-        return tuple(self._seq)
+        return (*self._seq, self._baro.seq if self._baro else 0,
+                self._mag.seq if self._mag else 0)
+
+    def configure_baro(self, rate_hz, offset_pa, noise_pa, get_temp) -> None:
+        self._baro = _LowRate(float(rate_hz))
+        self._baro_cfg = (float(offset_pa), float(noise_pa), get_temp)
+
+    def configure_mag(self, rate_hz, field_ned, offset, noise_gauss) -> None:
+        self._mag = _LowRate(float(rate_hz))
+        self._mag_cfg = (tuple(map(float, field_ned)), tuple(map(float, offset)),
+                         float(noise_gauss))
+
+    def set_baro_block(self, block) -> None:
+        self._baro.noise, self._baro.pos = block.tolist(), 0
+
+    def set_mag_block(self, block) -> None:
+        self._mag.noise, self._mag.pos = block.tolist(), 0
+
+    def due(self) -> tuple:
+        return (self._baro.next_ns if self._baro else -1, self._mag.next_ns if self._mag else -1)
 
     def step(self, pwm) -> int:
         if not self.scalar_imu:
@@ -232,6 +279,30 @@ class Kernel:
             self.upside_down_steps = 0
         if hagl_m < c["strike_agl"] and rotor_strike(g["phi"], g["theta"], hagl_m):
             flags |= F_ROTOR_STRIKE
+        b = self._baro
+        if b is not None and sim_ns >= b.next_ns:
+            temp_r = self._baro_cfg[2]()
+            (n,) = b.take()
+            if b.pos >= len(b.noise):
+                flags |= F_BARO_BLOCK_DONE
+            offset_pa, noise_pa, _ = self._baro_cfg
+            pa = st[ST_BARO_PA] + offset_pa + noise_pa * n
+            sb.BARO.pack_into(self.buf, slot * 64, 2, 0, b.seq & 0xFFFFFFFF, sim_ns, 0,
+                              pressure_pa(pa), temp_r / 1.8 - 273.15)
+            b.seq += 1
+            slot += 1
+        m = self._mag
+        if m is not None and sim_ns >= m.next_ns:
+            n = m.take()
+            if m.pos >= len(m.noise):
+                flags |= F_MAG_BLOCK_DONE
+            field, off, s = self._mag_cfg
+            bx, by, bz = ned_to_frd(g["phi"], g["theta"], g["psi"], field)
+            sb.MAG.pack_into(self.buf, slot * 64, 3, 0, m.seq & 0xFFFFFFFF, sim_ns, 0,
+                             bx + off[0] + s * n[0], by + off[1] + s * n[1],
+                             bz + off[2] + s * n[2])
+            m.seq += 1
+            slot += 1
         if sim_ns >= self.next_slow_ns:
             flags |= F_SLOW_DUE
         else:

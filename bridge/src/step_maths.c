@@ -103,3 +103,34 @@ int sb_rotor_strike(double phi, double theta, double hagl_m)
     }
     return 0;
 }
+
+double sb_quant_pressure_pa(double pa)
+{
+    if (!(pa > 0.0) || isinf(pa))
+        return pa;
+    const double hpa = pa / 100.0;
+    int exp2;
+    (void)frexp(hpa, &exp2);                  /* hpa = f * 2^exp2, 0.5 <= f < 1 */
+    const double quantum = ldexp(1.0, exp2 - 17);
+    return nearbyint(hpa / quantum) * quantum * 100.0;
+}
+
+int64_t sb_due_ns(int64_t m, double rate_hz)
+{
+    return (int64_t)nearbyint((double)m * 1e9 / rate_hz);
+}
+
+void sb_ned_to_frd(double phi, double theta, double psi, const double v[3], double out[3])
+{
+    const double cph = cos(phi), sph = sin(phi);
+    const double cth = cos(theta), sth = sin(theta);
+    const double cps = cos(psi), sps = sin(psi);
+    /* yaw about down, then pitch about the new right axis, then roll about forward */
+    const double x1 = cps * v[0] + sps * v[1];
+    const double y1 = -sps * v[0] + cps * v[1];
+    const double x2 = cth * x1 - sth * v[2];
+    const double z2 = sth * x1 + cth * v[2];
+    out[0] = x2;
+    out[1] = cph * y1 + sph * z2;
+    out[2] = -sph * y1 + cph * z2;
+}

@@ -37,6 +37,16 @@ void sb_quat_from_euler(double phi, double theta, double psi, double q[4]);
 double sb_quant_down_m(double d);
 double sb_quant_velocity_m_s(double v);
 
+/* Pa on the grid HIL_SENSOR.abs_pressure (float32 hPa) carries exactly: 17 significant
+ * bits in hPa (mavlink/hil_quant.py pressure_pa). */
+double sb_quant_pressure_pa(double pa);
+
+/* Due time [ns] of sample m of a periodic sensor: round(m * 1e9 / rate_hz) (lowrate.py). */
+int64_t sb_due_ns(int64_t m, double rate_hz);
+
+/* Rotate a NED vector into body FRD for ZYX Euler angles (frames.py ned_to_frd). */
+void sb_ned_to_frd(double phi, double theta, double psi, const double ned[3], double frd[3]);
+
 /* 1 when a rotor hub of the quad is at or below flat ground at height hagl_m. */
 int sb_rotor_strike(double phi, double theta, double hagl_m);
 

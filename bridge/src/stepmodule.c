@@ -4,10 +4,11 @@
  * `Kernel.step(pwm)` writes the four pulse widths into JSBSim, runs it, reads the
  * state back through the property nodes' bound methods, and writes the step's
  * IMU, GT_ATT and GT_NAV records (64-byte sb_record slots) into the simulator's
- * step buffer. Done from Python this costs ~6 us of interpreter work per step on
- * top of JSBSim's ~5 us; here it is the bare calls. What happens at 100 Hz or
- * less (baro, mag and GNSS samples, setpoints, crash messages, noise blocks)
- * stays in Python (bridge/simulator.py), told by the returned flags.
+ * step buffer, and the baro and magnetometer records when due. Done from Python
+ * this costs ~6 us of interpreter work per step on top of JSBSim's ~5 us; here it
+ * is the bare calls. What happens at 10 Hz or less or only on events (GNSS fixes,
+ * setpoints, crash messages, noise blocks) stays in Python (bridge/simulator.py),
+ * told by the returned flags.
  *
  * The maths are step_maths.c; the readable reference with the same interface is
  * bridge/step_python.py. Python objects the kernel calls are held as strong
@@ -60,6 +61,18 @@ enum {
 #define F_TIPPED 0x800        /* on the ground, tilted past the crash tilt */
 #define F_FLIPPED 0x1000      /* upside down for flip_steps steps */
 #define F_ROTOR_STRIKE 0x2000
+#define F_BARO_BLOCK_DONE 0x4000  /* baro noise used up: set_baro_block before the next step */
+#define F_MAG_BLOCK_DONE 0x8000   /* mag noise used up: set_mag_block */
+
+/* A 100 Hz sensor the kernel samples (lowrate.py documents the models). */
+typedef struct {
+    int on;                   /* configured */
+    double rate_hz;
+    int64_t m, next_ns;       /* sample m is due at next_ns = round(m * 1e9 / rate_hz) */
+    Py_buffer noise;          /* float64 (rows, width): standard normals */
+    Py_ssize_t rows, pos;
+    uint32_t seq;
+} lowrate_t;
 
 typedef struct {
     PyObject_HEAD
@@ -87,6 +100,10 @@ typedef struct {
     int was_on_ground;
     double prev_vd;
     int64_t upside_down_steps, flip_steps;
+    lowrate_t baro, mag;
+    PyObject *get_temp;       /* bound getter of atmosphere/T-R (read when baro is due) */
+    double baro_offset_pa, baro_noise_pa;
+    double mag_field_ned[3], mag_offset[3], mag_noise_gauss;   /* gauss */
 } Kernel;
 
 static void release(Py_buffer *v)
@@ -102,6 +119,7 @@ static int Kernel_traverse(Kernel *self, visitproc visit, void *arg)
     Py_VISIT(self->run);
     for (int i = 0; i < G_COUNT; i++)
         Py_VISIT(self->getters[i]);
+    Py_VISIT(self->get_temp);
     return 0;
 }
 
@@ -112,6 +130,7 @@ static int Kernel_clear(Kernel *self)
     Py_CLEAR(self->run);
     for (int i = 0; i < G_COUNT; i++)
         Py_CLEAR(self->getters[i]);
+    Py_CLEAR(self->get_temp);
     return 0;
 }
 
@@ -123,6 +142,8 @@ static void Kernel_dealloc(Kernel *self)
     release(&self->state_view);
     release(&self->block_view);
     release(&self->temps_view);
+    release(&self->baro.noise);
+    release(&self->mag.noise);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -347,8 +368,9 @@ static long step_seq(Kernel *self, PyObject *pwm, Py_ssize_t first)
         rec->u.imu.samples_per_step = 1;
         rec->u.imu.reserved = 0;
     }
-    if (slot + 2 > self->n_slots) {
-        PyErr_SetString(PyExc_ValueError, "step buffer too small for the ground truth records");
+    if (slot + 4 > self->n_slots) {
+        PyErr_SetString(PyExc_ValueError, "step buffer too small for the ground truth, "
+                                          "baro and mag records");
         return -1;
     }
     sb_record *ra = &self->slots[slot++];
@@ -408,6 +430,51 @@ static long step_seq(Kernel *self, PyObject *pwm, Py_ssize_t first)
     }
     if (hagl_m < c[C_STRIKE_AGL] && sb_rotor_strike(g[G_PHI], g[G_THETA], hagl_m))
         flags |= F_ROTOR_STRIKE;
+    /* Baro then mag, when due (the contract's order: then GNSS, SETPOINT from Python). */
+    if (self->baro.on && sim_ns >= self->baro.next_ns) {
+        if (self->baro.pos >= self->baro.rows) {
+            PyErr_SetString(PyExc_RuntimeError, "no baro noise: call set_baro_block first");
+            return -1;
+        }
+        double temp_r;
+        PyObject *t = PyObject_CallNoArgs(self->get_temp);
+        if (t == NULL)
+            return -1;
+        temp_r = PyFloat_AsDouble(t);
+        Py_DECREF(t);
+        if (temp_r == -1.0 && PyErr_Occurred())
+            return -1;
+        lowrate_t *b = &self->baro;
+        b->next_ns = sb_due_ns(++b->m, b->rate_hz);
+        const double n = ((const double *)b->noise.buf)[b->pos++];
+        if (b->pos >= b->rows)
+            flags |= F_BARO_BLOCK_DONE;
+        const double pa = st[ST_BARO_PA] + self->baro_offset_pa + self->baro_noise_pa * n;
+        sb_record *r = &self->slots[slot++];
+        header(r, SB_KIND_BARO, b->seq++, sim_ns);
+        memset(r->u.raw, 0, sizeof r->u.raw);
+        r->u.baro.pressure_pa = (float)sb_quant_pressure_pa(pa);
+        r->u.baro.temperature_c = (float)(temp_r / 1.8 - 273.15);
+    }
+    if (self->mag.on && sim_ns >= self->mag.next_ns) {
+        lowrate_t *m = &self->mag;
+        if (m->pos >= m->rows) {
+            PyErr_SetString(PyExc_RuntimeError, "no mag noise: call set_mag_block first");
+            return -1;
+        }
+        m->next_ns = sb_due_ns(++m->m, m->rate_hz);
+        const double *n = (const double *)m->noise.buf + 3 * m->pos++;
+        if (m->pos >= m->rows)
+            flags |= F_MAG_BLOCK_DONE;
+        double b[3];
+        sb_ned_to_frd(g[G_PHI], g[G_THETA], g[G_PSI], self->mag_field_ned, b);
+        sb_record *r = &self->slots[slot++];
+        header(r, SB_KIND_MAG, m->seq++, sim_ns);
+        memset(r->u.raw, 0, sizeof r->u.raw);
+        for (int i = 0; i < 3; i++)
+            r->u.mag.field_frd_gauss[i] =
+                (float)(b[i] + self->mag_offset[i] + self->mag_noise_gauss * n[i]);
+    }
     if (sim_ns >= self->next_slow_ns)
         flags |= F_SLOW_DUE;
     else   /* nothing more this step: the last record closes it */
@@ -491,8 +558,91 @@ static PyObject *Kernel_set_injected(Kernel *self, PyObject *const *args, Py_ssi
 
 static PyObject *Kernel_seqs(Kernel *self, PyObject *Py_UNUSED(ignored))
 {
-    return Py_BuildValue("(kkk)", (unsigned long)self->seq_imu, (unsigned long)self->seq_att,
-                         (unsigned long)self->seq_nav);
+    return Py_BuildValue("(kkkkk)", (unsigned long)self->seq_imu, (unsigned long)self->seq_att,
+                         (unsigned long)self->seq_nav, (unsigned long)self->baro.seq,
+                         (unsigned long)self->mag.seq);
+}
+
+static int set_noise(lowrate_t *lr, PyObject *arr, Py_ssize_t width, const char *what)
+{
+    Py_buffer v;
+    if (get_f64(arr, &v, width, 0, what) < 0)
+        return -1;
+    if (v.ndim != 2 || v.shape[1] != width) {
+        PyErr_Format(PyExc_ValueError, "%s must be (rows, %zd) float64", what, width);
+        PyBuffer_Release(&v);
+        return -1;
+    }
+    release(&lr->noise);
+    lr->noise = v;
+    lr->rows = v.shape[0];
+    lr->pos = 0;
+    return 0;
+}
+
+static int start_schedule(lowrate_t *lr, double rate_hz)
+{
+    if (!(rate_hz > 0.0)) {
+        PyErr_SetString(PyExc_ValueError, "rate_hz must be > 0");
+        return -1;
+    }
+    lr->rate_hz = rate_hz;
+    lr->m = 1;
+    lr->next_ns = sb_due_ns(1, rate_hz);
+    lr->on = 1;
+    return 0;
+}
+
+/* configure_baro(rate_hz, offset_pa, noise_pa, get_temp) */
+static PyObject *Kernel_configure_baro(Kernel *self, PyObject *args)
+{
+    double rate, off, noise;
+    PyObject *get_temp;
+    if (!PyArg_ParseTuple(args, "dddO", &rate, &off, &noise, &get_temp))
+        return NULL;
+    if (!PyCallable_Check(get_temp)) {
+        PyErr_SetString(PyExc_TypeError, "get_temp must be callable");
+        return NULL;
+    }
+    if (start_schedule(&self->baro, rate) < 0)
+        return NULL;
+    self->baro_offset_pa = off;
+    self->baro_noise_pa = noise;
+    Py_INCREF(get_temp);
+    Py_XSETREF(self->get_temp, get_temp);
+    Py_RETURN_NONE;
+}
+
+/* configure_mag(rate_hz, field_ned (3), offset (3), noise_gauss) */
+static PyObject *Kernel_configure_mag(Kernel *self, PyObject *args)
+{
+    double rate, noise;
+    double f[3], o[3];
+    if (!PyArg_ParseTuple(args, "d(ddd)(ddd)d", &rate, &f[0], &f[1], &f[2], &o[0], &o[1], &o[2],
+                          &noise))
+        return NULL;
+    if (start_schedule(&self->mag, rate) < 0)
+        return NULL;
+    memcpy(self->mag_field_ned, f, sizeof f);
+    memcpy(self->mag_offset, o, sizeof o);
+    self->mag_noise_gauss = noise;
+    Py_RETURN_NONE;
+}
+
+static PyObject *Kernel_set_baro_block(Kernel *self, PyObject *arr)
+{
+    return set_noise(&self->baro, arr, 1, "baro noise") < 0 ? NULL : Py_NewRef(Py_None);
+}
+
+static PyObject *Kernel_set_mag_block(Kernel *self, PyObject *arr)
+{
+    return set_noise(&self->mag, arr, 3, "mag noise") < 0 ? NULL : Py_NewRef(Py_None);
+}
+
+static PyObject *Kernel_due(Kernel *self, PyObject *Py_UNUSED(ignored))
+{
+    return Py_BuildValue("(LL)", (long long)(self->baro.on ? self->baro.next_ns : -1),
+                         (long long)(self->mag.on ? self->mag.next_ns : -1));
 }
 
 static PyObject *Kernel_get_next_slow(Kernel *self, void *closure)
@@ -533,7 +683,17 @@ static PyMethodDef Kernel_methods[] = {
      "set_block(block (rows, 6), temps (rows)): the next IMU noise rows"},
     {"set_injected", (PyCFunction)(void (*)(void))Kernel_set_injected, METH_FASTCALL,
      "set_injected(x, y, z): injected gyro bias FRD [rad/s]"},
-    {"seqs", (PyCFunction)Kernel_seqs, METH_NOARGS, "records written: (imu, gt_att, gt_nav)"},
+    {"seqs", (PyCFunction)Kernel_seqs, METH_NOARGS,
+     "records written: (imu, gt_att, gt_nav, baro, mag)"},
+    {"configure_baro", (PyCFunction)Kernel_configure_baro, METH_VARARGS,
+     "configure_baro(rate_hz, offset_pa, noise_pa, get_temp): sample the baro here"},
+    {"configure_mag", (PyCFunction)Kernel_configure_mag, METH_VARARGS,
+     "configure_mag(rate_hz, field_ned, offset, noise_gauss): sample the mag here"},
+    {"set_baro_block", (PyCFunction)Kernel_set_baro_block, METH_O,
+     "set_baro_block((rows, 1) float64 standard normals)"},
+    {"set_mag_block", (PyCFunction)Kernel_set_mag_block, METH_O,
+     "set_mag_block((rows, 3) float64 standard normals)"},
+    {"due", (PyCFunction)Kernel_due, METH_NOARGS, "(baro next_ns, mag next_ns), -1 when off"},
     {NULL, NULL, 0, NULL}};
 
 static PyGetSetDef Kernel_getset[] = {
@@ -579,6 +739,7 @@ PyMODINIT_FUNC PyInit__step(void)
         {"F_SLOW_DUE", F_SLOW_DUE}, {"F_BLOCK_DONE", F_BLOCK_DONE},
         {"F_GROUND_CHANGED", F_GROUND_CHANGED}, {"F_TIPPED", F_TIPPED},
         {"F_FLIPPED", F_FLIPPED}, {"F_ROTOR_STRIKE", F_ROTOR_STRIKE},
+        {"F_BARO_BLOCK_DONE", F_BARO_BLOCK_DONE}, {"F_MAG_BLOCK_DONE", F_MAG_BLOCK_DONE},
         {"ST_COUNT", ST_COUNT}, {"G_COUNT", G_COUNT}, {"C_COUNT", C_COUNT}};
     for (size_t i = 0; i < sizeof ints / sizeof ints[0]; i++)
         if (PyModule_AddIntConstant(m, ints[i].name, ints[i].v) < 0) {
