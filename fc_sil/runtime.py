@@ -6,6 +6,11 @@ time), publishes the PWM, and acknowledges the lockstep step. The same poll
 serves `silbridge fc` (its own process, `run_fc`) and `silbridge fly
 --processes 1` (polled by the bridge right after each publish).
 
+Over shared memory the whole poll runs in C (`Core.poll_io`, fc_sil/ext/corepoll.c:
+pop, core, push, lockstep acknowledgement, statistics, log queues; the same steps
+and clock readings as the Python `_poll_py`, which serves the MAVLink HIL links
+and sinks that want each cycle's arrays). Python then runs only the supervisor.
+
 The FC never blocks on input (paper 3.4): when the ring is empty it returns,
 and the process driver waits with spin -> yield -> sleep so two processes on
 two cores do not starve each other. It watches the bridge through the segment
@@ -20,6 +25,7 @@ from time import monotonic_ns
 
 import numpy as np
 
+from silbridge.fc_sil import _core
 from silbridge.shm import Ring
 from silbridge.shm import lockstep as ls
 from silbridge.shm.timer_slack import set_timer_slack_ns
@@ -62,6 +68,12 @@ class _Series:
         return {f"p{q}": float(x) for q, x in zip(qs, p)}
 
 
+# The C poll's counters (fc_sil/ext/core_object.h FC_IO_*).
+(_IO_LAST_SIM_NS, _IO_LAST_K, _IO_POLLS, _IO_RECORDS, _IO_PWM_PUBLISHED, _IO_N_LATENCY,
+ _IO_N_PERIOD, _IO_N_E2E, _IO_WORDS) = range(9)
+# With the C poll, the log's batch boundaries are cut every this many polls.
+_FLUSH_POLLS = 128
+
 # Batches up to this size use views made once (a numpy slice costs ~150 ns per poll).
 _SMALL = 64
 
@@ -88,6 +100,7 @@ class FcLoop:
         self._status_out = np.zeros(batch, dtype=STATUS_DTYPE)
         core._c.bind_batch(self.buf, self._pwm_out, self._status_out)
         self._step = core._c.step_bound
+        self._cpoll = core._c.poll_io if isinstance(core._c, _core.Core) else None
         self._recs = _small_views(self.buf)
         self._pwms = _small_views(self._pwm_out)
         self._stats = _small_views(self._status_out)
@@ -103,12 +116,72 @@ class FcLoop:
         self.latency_ns = _Series()
         self.period_ns = _Series()
         self.e2e_ns = _Series()
-        self.polls = 0
-        self.records = 0
-        self.pwm_published = 0
+        self._polls = 0
+        self._records = 0
+        self._pwm_published = 0
         self._prev_consume = 0
-        self.last_sim_ns = 0
+        self._last_sim_ns = 0
+        # The C poll (shared memory, FC side): its counters land in _io (IO_* slots).
+        self._c_api = getattr(segment, "_c_api", None)
+        self._io = None
+        self._flush = None
+        self._flush_in = 0
         self.sink = sink
+
+    # Counters: kept by the C poll in _io, or by the Python poll in attributes.
+    @property
+    def last_sim_ns(self) -> int:
+        return self._iow[_IO_LAST_SIM_NS] if self._io is not None else self._last_sim_ns
+
+    @property
+    def polls(self) -> int:
+        return self._iow[_IO_POLLS] if self._io is not None else self._polls
+
+    @property
+    def records(self) -> int:
+        return self._iow[_IO_RECORDS] if self._io is not None else self._records
+
+    @property
+    def pwm_published(self) -> int:
+        return self._iow[_IO_PWM_PUBLISHED] if self._io is not None else self._pwm_published
+
+    def _sync_series(self) -> None:
+        if self._io is not None:
+            w = self._iow
+            self.latency_ns.n = w[_IO_N_LATENCY]
+            self.period_ns.n = w[_IO_N_PERIOD]
+            self.e2e_ns.n = w[_IO_N_E2E]
+
+    def _use_c_poll(self, capture) -> bool:
+        """Poll in C when the link is the shm segment and the sink (if any) captures."""
+        c = self.core._c
+        # Only the extension's own Core (a test may wrap it to filter records).
+        if self._c_api is None or (self._sink is not None and capture is None) or \
+                not isinstance(c, _core.Core):
+            if self._io is not None:
+                self._leave_c_poll()
+            return False
+        if self._io is None:
+            self._io = np.zeros(_IO_WORDS, dtype=np.int64)
+            self._iow = memoryview(self._io)
+            c.attach_io(self._c_api(), ls.FC_SIM_NS, self.latency_ns._arr,
+                        self.period_ns._arr, self.e2e_ns._arr, self._io)
+            self._io[_IO_LAST_SIM_NS] = self._last_sim_ns
+            self._io[_IO_POLLS] = self._polls
+            self._io[_IO_RECORDS] = self._records
+            self._io[_IO_PWM_PUBLISHED] = self._pwm_published
+            self._io[_IO_N_LATENCY] = self.latency_ns.n
+            self._io[_IO_N_PERIOD] = self.period_ns.n
+            self._io[_IO_N_E2E] = self.e2e_ns.n
+        return True
+
+    def _leave_c_poll(self) -> None:
+        self._sync_series()
+        w = self._iow
+        self._last_sim_ns, self._polls = w[_IO_LAST_SIM_NS], w[_IO_POLLS]
+        self._records, self._pwm_published = w[_IO_RECORDS], w[_IO_PWM_PUBLISHED]
+        self.core._c.attach_io(None)
+        self._io = None
 
     @property
     def sink(self):
@@ -119,13 +192,39 @@ class FcLoop:
 
     @sink.setter
     def sink(self, sink) -> None:
-        if self._tick is not None:
+        if self._tick is not None or self._flush is not None:
             self.core._c.bind_log(None)
         self._sink = sink
         capture = getattr(sink, "capture_fc", None)
-        self._tick = capture(self.core._c) if capture is not None else None
+        self._tick = self._flush = None
+        if self._use_c_poll(capture):
+            if capture is not None:   # C appends the /timing rows too; Python cuts batches
+                self._flush = capture(self.core._c, timing=True)
+                self._flush_in = _FLUSH_POLLS
+            self.poll = self._poll_c
+        else:
+            self._tick = capture(self.core._c) if capture is not None else None
+            self.poll = self._poll_py
 
-    def poll(self) -> int:
+    def _poll_c(self) -> int:
+        n = self._cpoll()
+        if n:
+            if self._flush is not None:
+                self._flush_in -= 1
+                if self._flush_in <= 0:
+                    self._flush_in = _FLUSH_POLLS
+                    self._flush()
+            if self.supervisor is not None:
+                k = self._iow[_IO_LAST_K]
+                if n < _SMALL and k < _SMALL:
+                    self.supervisor.after_batch(self, self._recs[n], self._pwms[k],
+                                                self._stats[k])
+                else:
+                    self.supervisor.after_batch(self, self.buf[:n], self._pwm_out[:k],
+                                                self._status_out[:k])
+        return n
+
+    def _poll_py(self) -> int:
         n = self._pop_into(self.buf)
         if n == 0:
             return 0
@@ -138,12 +237,12 @@ class FcLoop:
         if k:
             self._push_pwm(self._pwms[k] if k < _SMALL else self._pwm_out[:k])
             pwm_wall = monotonic_ns()
-            self.pwm_published += k
+            self._pwm_published += k
             e2e = self.e2e_ns
             e2e.buf[e2e.n & e2e.mask] = pwm_wall - newest_wall
             e2e.n += 1
         if self._u16[(n - 1) * 32 + 1] & FLAG_STEP_END:
-            self.last_sim_ns = newest_sim
+            self._last_sim_ns = newest_sim
             self._set_word(ls.FC_SIM_NS, newest_sim)
         lat = self.latency_ns
         lat.buf[lat.n & lat.mask] = consume - newest_wall
@@ -155,8 +254,8 @@ class FcLoop:
             per.buf[per.n & per.mask] = period
             per.n += 1
         self._prev_consume = consume
-        self.polls += 1
-        self.records += n
+        self._polls += 1
+        self._records += n
         if self._tick is not None:
             self._tick(newest_sim, newest_wall, consume, pwm_wall, period)
             sink = None
@@ -174,8 +273,15 @@ class FcLoop:
                 self.supervisor.after_batch(self, recs, pwm, status)
         return n
 
+    def close(self) -> None:
+        """Detach the C poll from the segment (before the segment closes)."""
+        if self._io is not None:
+            self._leave_c_poll()
+        self.poll = self._poll_py
+
     def summary(self, nominal_period_ns: float | None = None) -> dict:
         """Latency and jitter figures (us) for the run summary."""
+        self._sync_series()
         periods = self.period_ns.values()
         if nominal_period_ns is None and len(periods):
             nominal_period_ns = float(np.median(periods))

@@ -316,9 +316,9 @@ class LogWriter:
     CAPTURE_CHECK_TICKS = 128
 
     def capture_targets(self, status_dtype: np.dtype) -> tuple:
-        """(kind queues: tuple of 16 bytearray|None, stage, /fc/status queue) for a C
-        producer. Opens /fc/status and /timing now; record channels open as their first
-        records come through the stage."""
+        """(kind queues: tuple of 16 bytearray|None, stage, /fc/status queue, /timing
+        queue) for a C producer. Opens /fc/status and /timing now; record channels open
+        as their first records come through the stage."""
         st = self._streams.get(STATUS_CHANNEL) or self._open(STATUS_CHANNEL, status_dtype)
         if st.in_dtype != status_dtype:
             raise ValueError(f"{STATUS_CHANNEL} holds {st.in_dtype} rows, not {status_dtype}")
@@ -329,7 +329,7 @@ class LogWriter:
             stream = self._streams.get(name)
             if stream is not None and stream.in_dtype == DTYPES[Kind(kind)]:
                 queues[kind] = stream.pending
-        return tuple(queues), self._stage, st.pending
+        return tuple(queues), self._stage, st.pending, tm.pending
 
     def set_capture_rebind(self, rebind) -> None:
         """rebind(): called after the stage split opened channels (see capture_targets)."""
@@ -345,6 +345,11 @@ class LogWriter:
         if self._capture_ticks >= self.CAPTURE_CHECK_TICKS:
             self._capture_ticks = 0
             self._capture_flush()
+
+    def capture_flush(self) -> None:
+        """Cut full batches and split the stage (a C producer that also writes the /timing
+        rows calls this every CAPTURE_CHECK_TICKS cycles instead of cycle_tick)."""
+        self._capture_flush()
 
     def _capture_flush(self) -> None:
         opened = len(self._streams)

@@ -33,21 +33,23 @@ class RunLogSink:
         self._fc_logs_pwm = fc_logs_pwm
         self._unbind = None
 
-    def capture_fc(self, core_c):
+    def capture_fc(self, core_c, timing: bool = False):
         """Let the FC's C core append what it consumes straight into the log's queues
-        (Core.bind_log); returns the per-cycle hook tick(sim_ns, imu_wall_ns,
-        consume_wall_ns, pwm_wall_ns, loop_period_ns). The FC loop uses this instead of
-        fc_batch when the sink offers it: no Python work per record."""
+        (Core.bind_log). Returns the per-cycle hook tick(sim_ns, imu_wall_ns,
+        consume_wall_ns, pwm_wall_ns, loop_period_ns) or, with timing=True (the C poll
+        writes the /timing rows too), flush() to call every hundred or so cycles. The FC
+        loop uses this instead of fc_batch when the sink offers it: no Python work per
+        record."""
         from silbridge.fc_sil.status import STATUS_DTYPE
         writer = self.writer
 
         def bind():
-            queues, stage, status = writer.capture_targets(STATUS_DTYPE)
-            core_c.bind_log(queues, stage, status, self._fc_logs_pwm)
+            queues, stage, status, tm = writer.capture_targets(STATUS_DTYPE)
+            core_c.bind_log(queues, stage, status, self._fc_logs_pwm, tm if timing else None)
         bind()
         writer.set_capture_rebind(bind)
         self._unbind = lambda: core_c.bind_log(None)
-        return writer.cycle_tick
+        return writer.capture_flush if timing else writer.cycle_tick
 
     # fc_batch(recs, pwm, status, timing): FC side, once per cycle; timing is the
     # /timing row (sim_ns, imu_wall_ns, consume_wall_ns, pwm_wall_ns, loop_period_ns).

@@ -24,31 +24,7 @@
 #include "fc_core.h"
 #include "sb_records.h"
 
-typedef struct {
-    PyObject_HEAD
-    fc_core_t core;
-    uint32_t pwm_seq;       /* seq of the next PWM record */
-    uint32_t last_seq;      /* seq of the last consumed sensor record */
-    uint64_t records_in;    /* records consumed by step_batch */
-    uint64_t unknown_kind;  /* records of a kind the FC does not consume */
-    int ignore_setpoints;   /* MAVLink control: scenario SETPOINT records are skipped */
-    uint64_t setpoints_ignored;
-    int64_t last_kind_ns[16]; /* sim time of the last record of each kind (-1: never) */
-    double accel_sum[3];      /* raw IMU accel summed since take_accel_mean() [m/s^2] */
-    uint32_t accel_n;
-    /* bind_batch(): the poll loop's record, PWM and status arrays, held so step_bound(n)
-     * costs no argument parsing or slicing per call (views[0] records, 1 PWM, 2 status). */
-    Py_buffer bound[3];
-    int have_bound;
-    /* bind_log(): bytearrays step_bound appends each consumed record to (the queue of
-     * its kind, or else the mixed stage), PWM records too when log_pwm, and the status
-     * rows: a run's log then costs a memcpy per record and no Python per record. */
-    PyObject *log_kind[16];
-    PyObject *log_stage;
-    PyObject *log_status;
-    int log_pwm;
-    int log_on;               /* any record queue bound */
-} CoreObject;
+#include "core_object.h"
 
 const char *fc_ext_status_name(int status)
 {
@@ -82,7 +58,7 @@ void *fc_ext_state(Py_buffer *view, size_t size, const char *what)
     return view->buf;
 }
 
-static int64_t monotonic_ns(void)
+int64_t fc_ext_monotonic_ns(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -447,7 +423,7 @@ static void emit_pwm(CoreObject *self, int64_t tick, sb_record *out, fc_core_sta
     r.h.kind = SB_KIND_PWM;
     r.h.seq = self->pwm_seq++;
     r.h.sim_ns = tick;
-    r.h.wall_ns = monotonic_ns();
+    r.h.wall_ns = fc_ext_monotonic_ns();
     for (int m = 0; m < FC_MIXER_MOTORS; m++) {
         r.u.pwm.pwm_us[m] = pwm[m];
     }
@@ -469,7 +445,7 @@ static Py_ssize_t out_capacity(const Py_buffer *pwm_buf, const Py_buffer *st_buf
 
 /* Consume n records at base; PWM records and status rows go to the outputs (cap rows).
  * Returns the PWM ticks emitted, or -1 with an exception set. */
-static Py_ssize_t run_records(CoreObject *self, const unsigned char *base, Py_ssize_t n,
+Py_ssize_t fc_ext_run_records(CoreObject *self, const unsigned char *base, Py_ssize_t n,
                               sb_record *pwm_out, fc_core_status_t *st_out, Py_ssize_t cap)
 {
     const int64_t bound = pwm_tick_bound(&self->core, base, n);
@@ -558,7 +534,7 @@ static PyObject *Core_step_batch(CoreObject *self, PyObject *args)
     if (rec.len % SB_RECORD_SIZE != 0) {
         PyErr_SetString(PyExc_ValueError, "records must be whole 64-byte slots");
     } else {
-        Py_ssize_t k = run_records(self, rec.buf, rec.len / SB_RECORD_SIZE, pwm_buf.buf,
+        Py_ssize_t k = fc_ext_run_records(self, rec.buf, rec.len / SB_RECORD_SIZE, pwm_buf.buf,
                                    st_buf.buf, out_capacity(&pwm_buf, &st_buf));
         result = k < 0 ? NULL : PyLong_FromSsize_t(k);
     }
@@ -570,6 +546,7 @@ static PyObject *Core_step_batch(CoreObject *self, PyObject *args)
 
 static void unbind(CoreObject *self)
 {
+    fc_ext_detach_io(self);   /* poll_io uses the bound arrays */
     if (self->have_bound) {
         for (int i = 0; i < 3; i++)
             PyBuffer_Release(&self->bound[i]);
@@ -596,7 +573,7 @@ static PyObject *Core_bind_batch(CoreObject *self, PyObject *args)
 }
 
 /* Append len bytes to a bytearray (amortised growth); -1 with an exception on failure. */
-static int append_bytes(PyObject *ba, const void *src, Py_ssize_t len)
+int fc_ext_append_bytes(PyObject *ba, const void *src, Py_ssize_t len)
 {
     if (len == 0)
         return 0;
@@ -613,16 +590,18 @@ static void clear_log(CoreObject *self)
         Py_CLEAR(self->log_kind[i]);
     Py_CLEAR(self->log_stage);
     Py_CLEAR(self->log_status);
+    Py_CLEAR(self->log_timing);
     self->log_pwm = 0;
     self->log_on = 0;
 }
 
-/* bind_log(kind_queues, stage, status, log_pwm); bind_log(None) turns capture off. */
+/* bind_log(kind_queues, stage, status, log_pwm, timing); bind_log(None) turns capture off.
+ * timing: the /timing queue poll_io appends its row to (step_bound has no clock). */
 static PyObject *Core_bind_log(CoreObject *self, PyObject *args)
 {
-    PyObject *kinds, *stage = Py_None, *st = Py_None;
+    PyObject *kinds, *stage = Py_None, *st = Py_None, *timing = Py_None;
     int log_pwm = 0;
-    if (!PyArg_ParseTuple(args, "O|OOp", &kinds, &stage, &st, &log_pwm)) {
+    if (!PyArg_ParseTuple(args, "O|OOpO", &kinds, &stage, &st, &log_pwm, &timing)) {
         return NULL;
     }
     if (kinds == Py_None) {
@@ -634,12 +613,13 @@ static PyObject *Core_bind_log(CoreObject *self, PyObject *args)
                                          "(bytearray or None), one per record kind");
         return NULL;
     }
-    PyObject *objs[18];
+    PyObject *objs[19];
     for (int i = 0; i < 16; i++)
         objs[i] = PyTuple_GET_ITEM(kinds, i);
     objs[16] = stage;
     objs[17] = st;
-    for (int i = 0; i < 18; i++) {
+    objs[18] = timing;
+    for (int i = 0; i < 19; i++) {
         if (objs[i] != Py_None && !PyByteArray_Check(objs[i])) {
             PyErr_SetString(PyExc_TypeError, "bind_log: queues must be bytearrays or None");
             return NULL;
@@ -650,6 +630,7 @@ static PyObject *Core_bind_log(CoreObject *self, PyObject *args)
         self->log_kind[i] = objs[i] == Py_None ? NULL : Py_NewRef(objs[i]);
     self->log_stage = stage == Py_None ? NULL : Py_NewRef(stage);
     self->log_status = st == Py_None ? NULL : Py_NewRef(st);
+    self->log_timing = timing == Py_None ? NULL : Py_NewRef(timing);
     self->log_pwm = log_pwm;
     self->log_on = self->log_stage != NULL;
     for (int i = 0; i < 16; i++)
@@ -658,7 +639,7 @@ static PyObject *Core_bind_log(CoreObject *self, PyObject *args)
 }
 
 /* Append whole records to their kind's queue (or the stage); -1 on failure. */
-static int log_records(CoreObject *self, const unsigned char *base, Py_ssize_t n)
+int fc_ext_log_records(CoreObject *self, const unsigned char *base, Py_ssize_t n)
 {
     for (Py_ssize_t i = 0; i < n; i++) {
         const unsigned char *rec = base + (size_t)i * SB_RECORD_SIZE;
@@ -667,7 +648,7 @@ static int log_records(CoreObject *self, const unsigned char *base, Py_ssize_t n
         PyObject *dest = self->log_kind[kind & 15u];
         if (dest == NULL)
             dest = self->log_stage;
-        if (dest != NULL && append_bytes(dest, rec, SB_RECORD_SIZE) < 0)
+        if (dest != NULL && fc_ext_append_bytes(dest, rec, SB_RECORD_SIZE) < 0)
             return -1;
     }
     return 0;
@@ -688,17 +669,17 @@ static PyObject *Core_step_bound(CoreObject *self, PyObject *arg)
                      self->bound[0].len / SB_RECORD_SIZE);
         return NULL;
     }
-    Py_ssize_t k = run_records(self, self->bound[0].buf, n, self->bound[1].buf,
+    Py_ssize_t k = fc_ext_run_records(self, self->bound[0].buf, n, self->bound[1].buf,
                                self->bound[2].buf, out_capacity(&self->bound[1], &self->bound[2]));
     if (k < 0) {
         return NULL;
     }
-    if (self->log_on && (log_records(self, self->bound[0].buf, n) < 0 ||
-                         (self->log_pwm && log_records(self, self->bound[1].buf, k) < 0))) {
+    if (self->log_on && (fc_ext_log_records(self, self->bound[0].buf, n) < 0 ||
+                         (self->log_pwm && fc_ext_log_records(self, self->bound[1].buf, k) < 0))) {
         return NULL;
     }
     if (self->log_status != NULL &&
-        append_bytes(self->log_status, self->bound[2].buf,
+        fc_ext_append_bytes(self->log_status, self->bound[2].buf,
                      k * (Py_ssize_t)sizeof(fc_core_status_t)) < 0) {
         return NULL;
     }
@@ -707,6 +688,7 @@ static PyObject *Core_step_bound(CoreObject *self, PyObject *arg)
 
 static void Core_dealloc(CoreObject *self)
 {
+    fc_ext_detach_io(self);
     unbind(self);
     clear_log(self);
     Py_TYPE(self)->tp_free((PyObject *)self);
@@ -754,18 +736,18 @@ static PyObject *bench_steps(PyObject *module, PyObject *args)
     }
     int64_t t0, t1, t2;
     Py_BEGIN_ALLOW_THREADS  /* c is private to this call */
-    t0 = monotonic_ns();
+    t0 = fc_ext_monotonic_ns();
     for (long long i = 0; i < n_imu; i++, t += period_ns) {
         const float ph = (float)(i & 1023) * (6.2831853f / 1024.0f);
         gyro[0] = 0.02f * sinf(ph);
         gyro[1] = 0.02f * cosf(ph);
         (void)fc_core_imu_step(c, t, accel, gyro);
     }
-    t1 = monotonic_ns();
+    t1 = fc_ext_monotonic_ns();
     for (long long i = 0; i < n_pwm; i++) {
         (void)fc_core_pwm_step(c, t, pwm);
     }
-    t2 = monotonic_ns();
+    t2 = fc_ext_monotonic_ns();
     Py_END_ALLOW_THREADS
     const unsigned long loops = (unsigned long)c->loop_count;
     const int spool = c->spool;
@@ -823,6 +805,11 @@ static PyMethodDef Core_methods[] = {
     {"bind_log", (PyCFunction)Core_bind_log, METH_VARARGS,
      "bind_log(kind_queues[16], stage, status, log_pwm): step_bound appends consumed "
      "records, PWM records (log_pwm) and status rows to these bytearrays; bind_log(None): off."},
+    {"attach_io", (PyCFunction)fc_ext_attach_io, METH_VARARGS,
+     "attach_io(segment._c_api(), fc_sim_word, latency, period, e2e, words): poll_io's "
+     "segment, int64 statistics rings and counters (core_object.h); attach_io(None) detaches."},
+    {"poll_io", (PyCFunction)fc_ext_poll_io, METH_NOARGS,
+     "poll_io() -> records consumed: FcLoop.poll over shared memory in C (corepoll.c)."},
     {"step_bound", (PyCFunction)Core_step_bound, METH_O,
      "step_bound(n) -> PWM ticks: step_batch over the first n bound records."},
     {"set_param", (PyCFunction)Core_set_param, METH_VARARGS,

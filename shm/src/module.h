@@ -24,6 +24,7 @@
 #define PyDataType_ELSIZE(d) ((d)->elsize)
 #endif
 
+#include "sb_capi.h"
 #include "sb_ring.h"
 #include "sb_segment.h"
 #include "sb_wait.h"

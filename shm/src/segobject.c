@@ -106,6 +106,36 @@ static PyObject *Seg_close(SegmentObject *self, PyObject *Py_UNUSED(ignored))
     Py_RETURN_NONE;
 }
 
+static void capi_free(PyObject *capsule)
+{
+    PyMem_Free(PyCapsule_GetPointer(capsule, SB_CAPI_CAPSULE));
+    Py_XDECREF((PyObject *)PyCapsule_GetContext(capsule));
+}
+
+/* _c_api() -> capsule for other C extensions (sb_capi.h). */
+static PyObject *Seg_c_api(SegmentObject *self, PyObject *Py_UNUSED(ignored))
+{
+    if (sb_check_open(self)) return NULL;
+    sb_capi *api = PyMem_Malloc(sizeof *api);
+    if (!api) return PyErr_NoMemory();
+    api->version = SB_CAPI_VERSION;
+    api->is_owner = self->seg.is_owner;
+    api->seg = &self->seg;
+    api->rings = self->rings;
+    PyObject *cap = PyCapsule_New(api, SB_CAPI_CAPSULE, capi_free);
+    if (!cap) {
+        PyMem_Free(api);
+        return NULL;
+    }
+    Py_INCREF(self);
+    if (PyCapsule_SetContext(cap, self) < 0) {   /* the capsule keeps the segment alive */
+        Py_DECREF(self);
+        Py_DECREF(cap);
+        return NULL;
+    }
+    return cap;
+}
+
 static PyObject *Seg_unlink(SegmentObject *self, PyObject *Py_UNUSED(ignored))
 {
     if (!self->seg.is_owner) {
@@ -280,6 +310,8 @@ static PyMethodDef Seg_methods[] = {
      "close(): unmap and mark this side closed (idempotent)."},
     {"unlink", (PyCFunction)Seg_unlink, METH_NOARGS,
      "unlink(): owner only; remove the name if it still refers to this segment."},
+    {"_c_api", (PyCFunction)Seg_c_api, METH_NOARGS,
+     "_c_api() -> capsule: the segment for another C extension (shm/include/sb_capi.h)."},
     {"beat", (PyCFunction)Seg_beat, METH_NOARGS,
      "beat() -> int: bump this side's heartbeat counter."},
     {"peer_heartbeat", (PyCFunction)Seg_peer_heartbeat, METH_NOARGS,

@@ -1,5 +1,6 @@
-"""The FC's C-side log capture (Core.bind_log + LogWriter.cycle_tick) against the plain
-per-cycle path (sink.fc_batch -> write_cycle): the same flight must give the same log."""
+"""The FC's C poll with its log capture (Core.poll_io + Core.bind_log, fc_sil/ext) against
+the Python poll with the plain per-cycle path (sink.fc_batch -> write_cycle): the same
+flight must give the same log, /timing rows included (but their wall-clock values)."""
 
 import numpy as np
 
@@ -28,7 +29,7 @@ def _fly(tmp_path, monkeypatch, plain: bool):
         if plain:
             return _PlainSink(sink)
         orig = sink.capture_fc
-        sink.capture_fc = lambda core_c: captured.append(1) or orig(core_c)
+        sink.capture_fc = lambda core_c, **kw: captured.append(1) or orig(core_c, **kw)
         return sink
 
     monkeypatch.setattr(run_log, "RunLogSink", make)

@@ -1,0 +1,84 @@
+/*
+ * core_object.h - the Core object of silbridge.fc_sil._core, shared by
+ * coremodule.c (construction, parameters, record batches, logging queues) and
+ * corepoll.c (the whole FC poll over the shared-memory rings in one call).
+ */
+#ifndef FC_CORE_OBJECT_H
+#define FC_CORE_OBJECT_H
+
+#include "ext_common.h"
+
+#include <stdint.h>
+
+#include "fc_core.h"
+#include "sb_capi.h"
+#include "sb_records.h"
+
+/* attach_io(): the segment and where the C poll leaves its results (FcLoop's series
+ * and counters). The counters live in a bound int64 array Python reads directly. */
+enum {
+    FC_IO_LAST_SIM_NS = 0, /* sim time of the last step the FC finished [ns] */
+    FC_IO_LAST_K,          /* PWM records of the last poll */
+    FC_IO_POLLS,           /* polls that consumed records */
+    FC_IO_RECORDS,         /* records consumed */
+    FC_IO_PWM_PUBLISHED,   /* PWM records pushed */
+    FC_IO_N_LATENCY,       /* samples written to each statistics ring */
+    FC_IO_N_PERIOD,
+    FC_IO_N_E2E,
+    FC_IO_WORDS
+};
+
+typedef struct fc_io_t {
+    PyObject *capsule;        /* keeps the Segment alive (sb_capi.h) */
+    const sb_capi *api;       /* NULL: not attached */
+    int fc_sim_word;          /* lockstep word index of FC_SIM_NS */
+    Py_buffer series[3];      /* int64 rings: latency, period, e2e [ns] */
+    uint64_t series_mask;
+    Py_buffer words_view;     /* int64[FC_IO_WORDS] */
+    int64_t *words;
+    int64_t prev_consume_ns;
+} fc_io_t;
+
+typedef struct CoreObject {
+    PyObject_HEAD
+    fc_core_t core;
+    uint32_t pwm_seq;       /* seq of the next PWM record */
+    uint32_t last_seq;      /* seq of the last consumed sensor record */
+    uint64_t records_in;    /* records consumed by step_batch */
+    uint64_t unknown_kind;  /* records of a kind the FC does not consume */
+    int ignore_setpoints;   /* MAVLink control: scenario SETPOINT records are skipped */
+    uint64_t setpoints_ignored;
+    int64_t last_kind_ns[16]; /* sim time of the last record of each kind (-1: never) */
+    double accel_sum[3];      /* raw IMU accel summed since take_accel_mean() [m/s^2] */
+    uint32_t accel_n;
+    /* bind_batch(): the poll loop's record, PWM and status arrays, held so step_bound(n)
+     * costs no argument parsing or slicing per call (views[0] records, 1 PWM, 2 status). */
+    Py_buffer bound[3];
+    int have_bound;
+    /* bind_log(): bytearrays step_bound appends each consumed record to (the queue of
+     * its kind, or else the mixed stage), PWM records too when log_pwm, and the status
+     * rows: a run's log then costs a memcpy per record and no Python per record. */
+    PyObject *log_kind[16];
+    PyObject *log_stage;
+    PyObject *log_status;
+    int log_pwm;
+    int log_on;               /* any record queue bound */
+    PyObject *log_timing;     /* bytearray: the /timing channel's queue (poll_io rows) */
+    fc_io_t io;               /* attach_io(): the shared-memory poll loop in C (corepoll.c) */
+} CoreObject;
+
+/* coremodule.c */
+int64_t fc_ext_monotonic_ns(void);
+/* Consume n records at base; PWM records and status rows to the outputs (cap rows);
+ * returns the PWM ticks emitted, or -1 with an exception set. */
+Py_ssize_t fc_ext_run_records(CoreObject *self, const unsigned char *base, Py_ssize_t n,
+                              sb_record *pwm_out, fc_core_status_t *st_out, Py_ssize_t cap);
+int fc_ext_append_bytes(PyObject *ba, const void *src, Py_ssize_t len);
+int fc_ext_log_records(CoreObject *self, const unsigned char *base, Py_ssize_t n);
+
+/* corepoll.c: Core methods attach_io, poll_io; and the clean-up. */
+PyObject *fc_ext_attach_io(CoreObject *self, PyObject *args);
+PyObject *fc_ext_poll_io(CoreObject *self, PyObject *unused);
+void fc_ext_detach_io(CoreObject *self);
+
+#endif /* FC_CORE_OBJECT_H */
