@@ -5,19 +5,22 @@ baro and mag stay at 100 Hz and the FC returns PWM at 400 Hz; every step is a re
 loop (the rate is a wall-clock rate) with the real FC in its own process. Per step: achieved
 rate per stream at the FC (count over the publish-time span of what arrived), sensor -> FC
 latency and FC loop jitter p50/p95/p99, drop and overwrite ratios, and whether PWM held
-400 Hz within 0.5 %. A transport stops at its first step that fails twice in a row.
+400 Hz within 0.5 %, plus the CPU other processes took meanwhile. A transport stops at its
+first failed step; a failure that may not be the transport's (a narrow miss, or a busy
+machine: see retry_reason) is run once more first, and must fail twice to end the series.
 
-Process layout: the parent spawns one *variant runner* per transport (it owns the bridge), and
-each step spawns an *FC child*. Both are `python -m silbridge.tools.transport_child`, which can
+Process layout (tools/transport_procs.py): the parent starts, all at once before anything
+is measured, one *runner* per CRC setting (it owns the bridge side), and each runner one *FC
+child* that serves all its steps (a fresh FlightCore and segment per step, the interpreter
+reused, so a step costs about its measured second); the parent then has the transports
+measured one after the other. Both are `python -m silbridge.tools.transport_child`, which can
 hide the `fastcrc` package before pymavlink loads (--no-fastcrc): pymavlink picks its CRC at
 import time, so the switch is per process and nothing in our own code paths holds it.
 """
 
 from __future__ import annotations
 
-import json
 import os
-import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -28,6 +31,16 @@ _NS = 1_000_000_000
 PWM_HZ = 400.0
 PWM_TOLERANCE = 0.005        # PWM within 0.5 % of 400 Hz
 IMU_TOLERANCE = 0.005        # the IMU must also arrive at >= 99.5 % of the requested rate
+# A failed step is run again (once; it must fail twice to end the series) only when the miss
+# may not be the transport's: it missed narrowly, as a scheduler hiccup does (measured: udp at
+# 50 kHz, IMU 99.8 %, PWM 397.9 Hz), or other processes held a noticeable share of the two
+# cores meanwhile (tools/transport_load.py). On an idle machine a transport past its ceiling
+# misses by more (tcp at 50 kHz: IMU 94.8 %, PWM 377 Hz); a second second would only confirm it.
+RETRY_IMU_FRACTION = 0.97    # IMU at >= 97 % of the requested rate
+RETRY_PWM_TOLERANCE = 0.03   # PWM within 3 % of 400 Hz
+RETRY_DROP_RATIO = 0.01      # fewer than 1 % of the records lost
+RETRY_OTHERS_CORES = 0.25    # others used a quarter of a core or more during the step
+STEP_ANSWER_S = 30.0         # the FC child answers within this once the bridge has stopped
 
 # name -> (transport, fastcrc)
 VARIANTS = {
@@ -120,7 +133,9 @@ class PwmClock:
         pass
 
 
-def fc_child(transport: str, instance: str, hil_addr: str | None) -> dict:
+def fc_child(transport: str, instance: str, hil_addr: str | None,
+             attach_timeout_s: float = 15.0) -> dict:
+    """One step on the FC side (in the FC child): attach, run the real FC until STOP, measure."""
     from silbridge.fc_sil.runtime import run_fc
     from silbridge.shm import lockstep as ls
 
@@ -128,7 +143,7 @@ def fc_child(transport: str, instance: str, hil_addr: str | None) -> dict:
     from .transport_wiring import fc_segment, guard_fc
 
     counter = StreamCounter()
-    with fc_segment(transport, instance, hil_addr=hil_addr, timeout_s=15.0) as seg:
+    with fc_segment(transport, instance, hil_addr=hil_addr, timeout_s=attach_timeout_s) as seg:
         loop = make_fc_loop(seg, sink=counter)
         guard_fc(loop)
         run_fc(loop, out=lambda s: print(s, file=sys.stderr))
@@ -143,7 +158,8 @@ def fc_child(transport: str, instance: str, hil_addr: str | None) -> dict:
         "latency_us": _pct(lat),
         "latency_cdf_us": (np.percentile(lat, np.arange(0, 101)) / 1e3).tolist() if len(lat) else [],
         "jitter_us": _pct(np.abs(periods - dt_ns)),
-        "fastcrc": _fastcrc_loaded(),
+        # The FC child imports pymavlink for every transport; over shm no CRC is computed.
+        "fastcrc": _fastcrc_loaded() if transport != "shm" else False,
         "link": counters,
     }
 
@@ -155,20 +171,28 @@ def _fastcrc_loaded() -> bool:
 
 
 # -- one step, bridge side --------------------------------------------------------------------
-def run_step(transport: str, imu_hz: int, duration_s: float, fastcrc: bool) -> dict:
+def run_step(transport: str, imu_hz: int, duration_s: float, fc,
+             step_no: int | None = None) -> dict:
+    """One IMU step: a fresh simulator and segment here, the FC in the FcChild `fc`.
+    step_no (default: the child's next) names the step in the protocol and the segment."""
+    from silbridge.bridge.runner_errors import BridgeError
     from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
     from silbridge.shm import Segment
 
-    from .flight import FlightOptions, last_json_line, make_simulator
-    from .transport_wiring import bridge_segment, fc_cli_args
+    from .flight import FlightOptions, make_simulator
+    from .transport_load import OthersCpu
+    from .transport_procs import ChildLost
+    from .transport_wiring import bridge_address, bridge_segment
 
+    if step_no is None:
+        step_no = fc.steps_started + 1
     opts = FlightOptions(scenario="S1", duration_s=duration_s, lockstep=False, imu_hz=imu_hz,
                          transport=transport)
     sc, sim = make_simulator(opts)
     # No start-up checks inside the window: this run measures, it does not gate.
     cfg = BridgeRunConfig(duration_s=duration_s, lockstep=False, check_window_s=duration_s * 10,
                           settle_s=duration_s, trace_hash=False)
-    name = f"tbench-{os.getpid()}"
+    name = f"tbench-{os.getpid()}-{step_no}"
     if transport == "shm":   # 8 MiB of sensor ring: up to ~60 ms of 2 MHz IMU in flight
         seg_cm = Segment.create(name, sensor_slots=1 << 17)
     else:
@@ -176,21 +200,30 @@ def run_step(transport: str, imu_hz: int, duration_s: float, fastcrc: bool) -> d
     clock = PwmClock()
     with seg_cm as seg:
         prepare_segment(seg, sim, cfg)
-        cmd = [sys.executable, "-m", "silbridge.tools.transport_child", "fc",
-               "--transport", transport, "--instance", name]
-        cmd += fc_cli_args(transport, seg)[2:]
-        if not fastcrc:
-            cmd.append("--no-fastcrc")
-        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
+        fc.start_step(step_no, transport, name,
+                      None if transport == "shm" else bridge_address(seg),
+                      attach_timeout_s=cfg.attach_timeout_s)
+        others = OthersCpu([os.getpid(), fc.pid])
+        others.start()
         try:
-            res = run_bridge(sim, seg, cfg, peer_check=lambda: proc.poll() is None,
-                             sink=clock, out=lambda s: None)
-            stdout, _ = proc.communicate(timeout=30)
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-    fc = last_json_line(stdout)
+            res = run_bridge(sim, seg, cfg, peer_check=fc.busy, sink=clock, out=lambda s: None)
+            others_cores = others.cores()
+        except BridgeError as e:
+            # The child's own account (its error, or that it died) says more than "the FC
+            # left"; it answers at once once the bridge has stopped.
+            try:
+                fc.step_result(step_no, timeout_s=5.0)
+            except ChildLost as lost:
+                raise lost from e
+            raise
+        fc_res = fc.step_result(step_no, timeout_s=STEP_ANSWER_S)
+    r = step_figures(imu_hz, res, clock, fc_res)
+    r["others_cpu_cores"] = others_cores
+    return r
+
+
+def step_figures(imu_hz: int, res, clock: PwmClock, fc: dict) -> dict:
+    """A step's result from what the bridge (res, clock) and the FC child (fc) measured."""
     written = res.ring["sensors"]["written"]
     received = fc.get("records", 0)
     overwritten = res.ring["sensors"]["overwritten"] + res.ring["sensors"]["rejected"]
@@ -216,6 +249,22 @@ def run_step(transport: str, imu_hz: int, duration_s: float, fastcrc: bool) -> d
         "fastcrc": fc.get("fastcrc"),
         "link": fc.get("link", {}),
     }
+
+
+def retry_reason(r: dict) -> str | None:
+    """Why a failed step deserves a second run (None: it does not, or it passed)."""
+    if r["ok"]:
+        return None
+    imu = r["achieved_hz"].get("imu", 0.0) or 0.0
+    pwm = r["achieved_hz"].get("pwm", 0.0) or 0.0
+    if (imu >= r["imu_hz_requested"] * RETRY_IMU_FRACTION
+            and abs(pwm / PWM_HZ - 1.0) <= RETRY_PWM_TOLERANCE
+            and r["drop_ratio"] <= RETRY_DROP_RATIO):
+        return "narrow miss"
+    others = r.get("others_cpu_cores", 0.0)
+    if others >= RETRY_OTHERS_CORES:
+        return f"other processes used {others:.2f} cores"
+    return None
 
 
 def codec_cost_us(imu_hz: int = 50_000, steps: int = 100) -> dict:
@@ -252,30 +301,39 @@ def codec_cost_us(imu_hz: int = 50_000, steps: int = 100) -> dict:
             "to_records": (t3 - t2) / n * 1e6, "messages": n, "fastcrc": _fastcrc_loaded()}
 
 
-def run_variant(variant: str, steps: list[int], duration_s: float) -> dict:
-    """All steps of one transport, in this (variant runner) process."""
-    transport, fastcrc = VARIANTS[variant]
+def run_variant(variant: str, steps: list[int], duration_s: float, fc) -> dict:
+    """All steps of one transport, bridge side in this (runner) process, the FC in the FcChild
+    `fc` (whose CRC setting must be the variant's: pymavlink fixes it per process)."""
+    transport, _ = VARIANTS[variant]
+    # Here, not at start-up: the other children's start-up would share the CPU with it.
     codec = codec_cost_us() if transport != "shm" else None
     results = []
     for hz in steps:
-        r = run_step(transport, hz, duration_s, fastcrc)
-        if not r["ok"]:
-            # Two cores shared with whatever else runs: a step must fail twice to end the
-            # series (both attempts are kept in the report).
-            again = run_step(transport, hz, duration_s, fastcrc)
-            again["first_attempt"] = {k: r[k] for k in ("achieved_hz", "drop_ratio",
-                                                         "late_steps", "ok")}
+        r = run_step(transport, hz, duration_s, fc)
+        why = retry_reason(r)
+        if why:
+            again = run_step(transport, hz, duration_s, fc)
+            again["first_attempt"] = {k: r[k] for k in ("achieved_hz", "drop_ratio", "late_steps",
+                                                         "ok", "others_cpu_cores")}
+            again["first_attempt"]["retried_because"] = why
             r = again
         results.append(r)
-        print(f"  {variant:<14} IMU {hz:>9,} Hz -> {r['achieved_hz'].get('imu', 0):>12,.0f} Hz  "
-              f"PWM {r['achieved_hz']['pwm']:6.1f} Hz  drop {r['drop_ratio'] * 100:6.3f} %  "
-              f"latency p50 {r['latency_us']['p50'] or 0:8.1f} us  "
-              f"{'ok' if r['ok'] else 'FAILED'}", file=sys.stderr, flush=True)
+        print(_step_line(variant, r), file=sys.stderr, flush=True)
         if not r["ok"]:
             break
     summary = summarise_variant(variant, results)
     summary["codec_us_per_message"] = codec
     return summary
+
+
+def _step_line(variant: str, r: dict) -> str:
+    a = r["achieved_hz"]
+    retried = r.get("first_attempt", {}).get("retried_because")
+    return (f"  {variant:<14} IMU {r['imu_hz_requested']:>9,} Hz -> {a.get('imu', 0):>12,.0f} Hz  "
+            f"PWM {a['pwm']:6.1f} Hz  drop {r['drop_ratio'] * 100:6.3f} %  "
+            f"latency p50 {r['latency_us']['p50'] or 0:8.1f} us  "
+            f"others {r['others_cpu_cores']:4.2f} cores  {'ok' if r['ok'] else 'FAILED'}"
+            + (f" (second run; first failed: {retried})" if retried else ""))
 
 
 def summarise_variant(variant: str, results: list[dict]) -> dict:
@@ -312,24 +370,43 @@ def run_comparison(cfg: TransportBenchConfig, out=print) -> dict:
     steps = imu_steps(int(cfg.imu_max_hz))
     if not steps:
         raise TransportBenchError("--imu-max must be at least 1000 Hz")
+    from .transport_procs import JsonChild
+
     t0 = time.monotonic()
     report = {"config": {"transports": list(cfg.transports), "imu_steps_hz": steps,
                          "duration_s": cfg.duration_s, "baro_hz": 100, "mag_hz": 100,
                          "pwm_hz": PWM_HZ, "pwm_tolerance": PWM_TOLERANCE},
               "transports": {}}
-    for variant in cfg.transports:
-        out(f"transport {variant}: IMU steps up to {steps[-1]:,} Hz, {cfg.duration_s:g} s each")
-        _, fastcrc = VARIANTS[variant]
-        cmd = [sys.executable, "-m", "silbridge.tools.transport_child", "variant", variant,
-               "--steps", ",".join(map(str, steps)), "--duration", str(cfg.duration_s)]
-        if not fastcrc:
-            cmd.append("--no-fastcrc")
-        proc = subprocess.run(cmd, stdout=subprocess.PIPE, text=True)
-        lines = proc.stdout.strip().splitlines()
-        if proc.returncode != 0 or not lines:
-            raise TransportBenchError(f"the {variant} runner failed (exit {proc.returncode}); "
-                                      f"see its messages above")
-        report["transports"][variant] = json.loads(lines[-1])
+    # One runner per CRC setting (pymavlink fixes it per process), each with its FC child,
+    # all started now, side by side, while nothing is measured; then the transports are
+    # measured strictly one after the other, the idle processes blocked on a pipe.
+    runners: dict = {}
+    try:
+        for variant in cfg.transports:
+            fastcrc = VARIANTS[variant][1]
+            if fastcrc not in runners:
+                cmd = [sys.executable, "-m", "silbridge.tools.transport_child", "runner",
+                       "--steps", ",".join(map(str, steps)), "--duration", str(cfg.duration_s)]
+                if not fastcrc:
+                    cmd.append("--no-fastcrc")
+                crc = "fastcrc" if fastcrc else "pure-Python-CRC"
+                runners[fastcrc] = JsonChild(cmd, f"the {crc} runner")
+        if cfg.out_dir:
+            from .transport_report import preload
+            preload()
+        for runner in runners.values():
+            runner.read_msg(120.0, "starting")
+        # Bound on one transport's series: every step and its retry, answered late.
+        series_s = 2 * len(steps) * (cfg.duration_s + STEP_ANSWER_S) + 60.0
+        for variant in cfg.transports:
+            out(f"transport {variant}: IMU steps up to {steps[-1]:,} Hz, "
+                f"{cfg.duration_s:g} s each")
+            runner = runners[VARIANTS[variant][1]]
+            runner.send({"go": variant}, f"being sent {variant}")
+            report["transports"][variant] = runner.read_msg(series_s, f"measuring {variant}")
+    finally:
+        for runner in runners.values():
+            runner.close()
     report["wall_s"] = time.monotonic() - t0
     if cfg.out_dir:
         from .transport_report import write_outputs

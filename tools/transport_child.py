@@ -1,8 +1,12 @@
 """Entry of the transport comparison's child processes (tools/transport_bench.py).
 
-    python -m silbridge.tools.transport_child variant NAME --steps 1000,2000 --duration S
-    python -m silbridge.tools.transport_child fc --transport T --instance N [--hil-addr A]
+    python -m silbridge.tools.transport_child runner --steps 1000,2000 --duration S
+    python -m silbridge.tools.transport_child fc
     ... [--no-fastcrc]
+
+`runner` is the bridge side: told {"go": "udp"} it runs all IMU steps of that transport and
+answers with its summary; `fc` is the FC child a runner keeps for all its steps. Both speak
+the line protocol of tools/transport_procs.py.
 
 --no-fastcrc makes `import fastcrc` fail in this process before anything imports pymavlink,
 which then falls back to its pure-Python CRC (the paper's RPC figures match that case). The
@@ -12,7 +16,6 @@ switch lives only in this entry point: no module of ours keeps it.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
 
@@ -24,26 +27,20 @@ def main(argv: list[str] | None = None) -> int:
         sys.modules["fastcrc"] = None        # `import fastcrc` now raises ImportError
     p = argparse.ArgumentParser(prog="transport_child")
     sub = p.add_subparsers(dest="role", required=True)
-    v = sub.add_parser("variant")
-    v.add_argument("name")
-    v.add_argument("--steps", required=True)
-    v.add_argument("--duration", type=float, required=True)
-    v.add_argument("--no-fastcrc", action="store_true")
+    r = sub.add_parser("runner")
+    r.add_argument("--steps", required=True)
+    r.add_argument("--duration", type=float, required=True)
+    r.add_argument("--no-fastcrc", action="store_true")
     f = sub.add_parser("fc")
-    f.add_argument("--transport", required=True)
-    f.add_argument("--instance", required=True)
-    f.add_argument("--hil-addr", default=None)
     f.add_argument("--no-fastcrc", action="store_true")
     args = p.parse_args(argv)
 
-    from . import transport_bench as tb
-    if args.role == "variant":
-        steps = [int(x) for x in args.steps.split(",") if x]
-        result = tb.run_variant(args.name, steps, args.duration)
-    else:
-        result = tb.fc_child(args.transport, args.instance, args.hil_addr)
-    print(json.dumps(result), flush=True)
-    return 0
+    from .transport_procs import protocol_channel, serve_fc, serve_runner
+    proto = protocol_channel()
+    if args.role == "fc":
+        return serve_fc(proto=proto)
+    steps = [int(x) for x in args.steps.split(",") if x]
+    return serve_runner(steps, args.duration, not args.no_fastcrc, proto=proto)
 
 
 if __name__ == "__main__":
