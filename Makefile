@@ -37,4 +37,4 @@ bench: setup
 	$(SB) transport --out $(BENCH_OUT)/transport
 
 clean:
-	rm -rf build *.egg-info shm/*.so fc_sil/*.so .pytest_cache
+	rm -rf build *.egg-info shm/*.so fc_sil/*.so bridge/*.so .pytest_cache

@@ -61,8 +61,9 @@ def bench_paced(steps: int = 2000, scenario: str = "S1") -> dict:
     for _ in range(200):
         sim.step(pwm)
     out = {}
-    for name in ("back_to_back", "paced_1khz"):
-        pacer = Pacer(sim.dt_ns) if name == "paced_1khz" else None
+    for name in ("back_to_back", "paced_1khz", "paced_1khz_busy_wait"):
+        pacer = None if name == "back_to_back" else Pacer(sim.dt_ns,
+                                                          busy_wait=name.endswith("busy_wait"))
         d = np.empty(steps)
         for k in range(steps):
             if pacer is not None:

@@ -4,6 +4,10 @@ time.sleep() at 1 kHz wakes ~90 us late (PERF_NOTES), so the pacer sleeps
 until a margin before the deadline and spins the rest on the monotonic clock.
 Deadlines are absolute (t0 + k * period / speed), so a late step does not
 push every later step back: the loop catches up, and the overrun is counted.
+
+busy_wait spins the whole period instead: on the 2-core VM a step that follows
+a sleep runs with cold caches (p50 26 us against 6 us back to back, `python -m
+silbridge.bridge.bench --paced`), which is most of the real-time jitter tail.
 """
 
 from __future__ import annotations
@@ -18,11 +22,12 @@ _NS = 1_000_000_000
 class Pacer:
     """Holds a loop to wall-clock deadlines start + k * dt_ns / speed."""
 
-    def __init__(self, dt_ns: int, speed: float = 1.0, spin_ns: int = 200_000):
+    def __init__(self, dt_ns: int, speed: float = 1.0, spin_ns: int = 200_000,
+                 busy_wait: bool = False):
         if speed <= 0:
             raise ValueError("speed must be > 0")
         self.period_ns = dt_ns / speed
-        self.spin_ns = spin_ns
+        self.spin_ns = 1 << 62 if busy_wait else spin_ns
         set_timer_slack_ns(1)   # exact wake-ups for this thread (shm/timer_slack.py)
         self.start_ns = time.monotonic_ns()
         self.late_steps = 0

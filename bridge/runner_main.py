@@ -30,6 +30,7 @@ class BridgeRunConfig:
     duration_s: float
     lockstep: bool = True
     speed: float = 1.0              # real time only: X times real time
+    busy_wait: bool = False         # real time only: spin the whole period (bridge/pacing.py)
     attach_timeout_s: float = 15.0
     check_window_s: float = 1.0     # sim seconds observed by the start-up checks
     settle_s: float = 10.0          # summary errors are taken after this sim time
@@ -164,7 +165,7 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
     window_s = cfg.check_window_s if cfg.lockstep else cfg.check_window_s * max(1.0, cfg.speed)
     check_step = max(1, int(round(window_s * _NS / sim.dt_ns)))
     watch_every = max(1, int(0.02 * _NS / sim.dt_ns))       # ~20 ms of sim time
-    pacer = None if cfg.lockstep else Pacer(sim.dt_ns, cfg.speed)
+    pacer = None if cfg.lockstep else Pacer(sim.dt_ns, cfg.speed, busy_wait=cfg.busy_wait)
     t0 = time.monotonic_ns()
     cpu0 = time.thread_time()
     if pacer is not None:

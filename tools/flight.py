@@ -37,6 +37,7 @@ class FlightOptions:
     duration_s: float | None = None     # None: the scenario's duration
     lockstep: bool = True
     speed: float = 1.0
+    busy_wait: bool = False             # real time: spin between steps, never sleep
     processes: int = 2
     imu_hz: float | None = None
     seed: int | None = None
@@ -66,6 +67,7 @@ def make_simulator(opts: FlightOptions):
 def bridge_config(opts: FlightOptions, sc) -> BridgeRunConfig:
     duration = opts.duration_s if opts.duration_s is not None else sc.duration_s
     return BridgeRunConfig(duration_s=duration, lockstep=opts.lockstep, speed=opts.speed,
+                           busy_wait=opts.busy_wait,
                            settle_s=min(10.0, duration / 2))
 
 
