@@ -148,3 +148,18 @@ def test_fly_refuses_a_bad_scenario_naming_the_key(tmp_path, body, names):
                         "--scenario", str(path)], capture_output=True, text=True)
     assert p.returncode == 2, p.stderr
     assert names in p.stderr and "Traceback" not in p.stderr
+
+
+@pytest.mark.parametrize("extra", [[], ["--busy-wait"]])
+def test_realtime_flight_keeps_to_the_wall_clock(extra):
+    """Real time paces the loop (sleeping, or spinning with --busy-wait): 2 s of sim time
+    take 2 s of wall time, and every stream arrives at its rate."""
+    import json
+    out = subprocess.run([sys.executable, "-m", "silbridge.tools", "fly", "--realtime",
+                          "--no-mavlink", "--processes", "1", "--duration", "2", "--json",
+                          *extra], capture_output=True, text=True, check=True).stdout
+    d = json.loads(out)
+    assert d["mode"] == "realtime x1"
+    assert 1.95 <= d["wall_s"] <= 3.0
+    assert d["rates_hz"]["imu"] == pytest.approx(1000.0, rel=0.05)
+    assert d["rates_hz"]["pwm"] == pytest.approx(400.0, rel=0.05)
