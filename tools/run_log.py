@@ -4,10 +4,9 @@ The loops know nothing of MCAP: they call `fc_batch` (or, offered
 `capture_fc`, a per-cycle tick while the FC's C core appends the records
 itself), `pwm_records` and `event` on whatever sink they are given. Sensor
 records are logged as the FC consumed them (wall stamps from the ring, so the
-log shows what the FC really got, drops included); PWM as the bridge received
-them, or with fc_logs_pwm (the FC in its own process, and `fly --processes 1`
-where the two are the same records) as the FC computed them, wall-stamped then;
-FC status and per-cycle timing from the FC side.
+log shows what the FC really got, drops included); PWM with fc_logs_pwm (what
+`fly` and `fc --log` use) as the FC computed them, wall-stamped then, otherwise
+as the bridge received them; FC status and per-cycle timing from the FC side.
 """
 
 from __future__ import annotations
