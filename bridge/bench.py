@@ -13,6 +13,11 @@ same way for reference. Bounded: at most reps x steps steps per rate.
 clock (the bridge's Pacer: sleep, then spin), against back-to-back steps: on a shared VM
 a step that waited a millisecond runs with cold caches and takes several times longer,
 which is where real-time loop jitter comes from (README, "What is measured").
+
+`--stalls S` measures the machine itself: a loop that only reads the monotonic clock for
+S seconds and records every gap over 20 us (the process was not running: host or kernel
+preemption, interrupts). The share of 1 ms windows hit by a gap over 50 us bounds what any
+1 kHz loop's jitter p99 can be here: above 1 %, a p99 under 50 us is out of reach.
 """
 
 from __future__ import annotations
@@ -76,6 +81,27 @@ def bench_paced(steps: int = 2000, scenario: str = "S1") -> dict:
     return out
 
 
+def bench_stalls(seconds: float = 5.0) -> dict:
+    """Gaps in a clock-reading spin loop: count per threshold and share of 1 ms windows."""
+    mono = time.monotonic_ns
+    t0 = prev = mono()
+    t_end = t0 + int(seconds * 1e9)
+    gaps, at = [], []
+    while prev < t_end:
+        now = mono()
+        if now - prev > 20_000:
+            gaps.append(now - prev)
+            at.append((now - t0) // 1_000_000)
+        prev = now
+    windows = max(1, int(seconds * 1000))
+    out = {"seconds": seconds, "max_us": max(gaps) / 1e3 if gaps else 0.0}
+    for thr_us in (20, 50, 100, 500):
+        hit = {w for g, w in zip(gaps, at) if g > thr_us * 1000}
+        out[f"over_{thr_us}us"] = {"count": sum(g > thr_us * 1000 for g in gaps),
+                                   "windows_pct": 100.0 * len(hit) / windows}
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--imu", type=int, nargs="+", default=[1000, 8000, 32000])
@@ -83,12 +109,16 @@ def main(argv=None) -> int:
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--paced", action="store_true",
                     help="also time steps paced at 1 kHz against back-to-back steps")
+    ap.add_argument("--stalls", type=float, default=0.0, metavar="S",
+                    help="also take a census of the machine's scheduling stalls for S seconds")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     rows = [bench(hz, args.steps, args.reps) for hz in args.imu]
     paced = bench_paced() if args.paced else None
+    stalls = bench_stalls(args.stalls) if args.stalls > 0 else None
     if args.json:
-        print(json.dumps({"bench": "bridge.step", "results": rows, "paced_us": paced}))
+        print(json.dumps({"bench": "bridge.step", "results": rows, "paced_us": paced,
+                          "stalls": stalls}))
     else:
         print(f"{'imu_hz':>8} {'us/step':>9} {'run() us':>9} {'bridge us':>10} {'x realtime':>11}")
         for r in rows:
@@ -98,6 +128,13 @@ def main(argv=None) -> int:
             for name, p in paced.items():
                 print(f"one step, {name.replace('_', ' ')}: p50 {p['p50']:.1f} us, "
                       f"p90 {p['p90']:.1f} us, p99 {p['p99']:.1f} us (wall)")
+        if stalls:
+            print(f"stalls of a spinning loop over {stalls['seconds']:g} s (longest "
+                  f"{stalls['max_us']:.0f} us):")
+            for thr in (20, 50, 100, 500):
+                st = stalls[f"over_{thr}us"]
+                print(f"  > {thr:>3} us: {st['count']:>6} gaps, {st['windows_pct']:6.2f} % of "
+                      f"1 ms windows")
     return 0
 
 
