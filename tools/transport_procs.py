@@ -68,6 +68,18 @@ def send_line(proto, msg: dict) -> None:
         raise ParentGone from None
 
 
+def _requests(inp):
+    """The parent's requests, one JSON object per line, until {"quit": true} or EOF."""
+    for line in inp:
+        line = line.strip()
+        if not line:
+            continue
+        msg = json.loads(line)
+        if msg.get("quit"):
+            return
+        yield msg
+
+
 def serve_fc(inp=None, proto=None) -> int:
     """The FC child's main loop (`python -m silbridge.tools.transport_child fc`)."""
     proto = protocol_channel() if proto is None else proto
@@ -87,13 +99,7 @@ def _serve_fc(inp, proto) -> int:
     from .transport_bench import fc_child
 
     send_line(proto, {"ready": True, "pid": os.getpid()})
-    for line in inp:
-        line = line.strip()
-        if not line:
-            continue
-        msg = json.loads(line)
-        if msg.get("quit"):
-            break
+    for msg in _requests(inp):
         k = msg.get("step")
         try:
             result = fc_child(msg["transport"], msg["instance"], msg.get("hil_addr"),
@@ -127,13 +133,7 @@ def _serve_runner(steps: list[int], duration_s: float, fastcrc: bool, inp, proto
 
         fc.wait_ready()
         send_line(proto, {"ready": True, "pid": os.getpid(), "fc_pid": fc.pid})
-        for line in inp:
-            line = line.strip()
-            if not line:
-                continue
-            msg = json.loads(line)
-            if msg.get("quit"):
-                break
+        for msg in _requests(inp):
             variant = msg["go"]
             if tb.VARIANTS[variant][1] != fastcrc:
                 raise ChildLost(f"transport {variant} sent to the runner with fastcrc={fastcrc}")
