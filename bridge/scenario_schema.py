@@ -36,9 +36,10 @@ Sensor defaults, with sources:
   conversion time 9.04 ms, modelled as a 10 ms first-order lag.
 - Magnetometer: ST LIS3MDL, RMS noise 3.2 mgauss (ultra-high-performance
   mode). Field at the default home (PX4's default SITL home, Zurich
-  47.397742 N, 8.545594 E, 488 m) from the World Magnetic Model 2025 for
-  2025.0: north 0.2136, east 0.0131, down 0.4312 gauss (declination 3.5 deg,
-  inclination 63.6 deg, total 0.481 gauss). Computed here, never from JSBSim's
+  47.397742 N, 8.545594 E, 488 m) from the World Magnetic Model 2025 (NOAA
+  coefficients WMM_2025.COF, evaluated with the pygeomag package) for 2026.0:
+  north 0.2152, east 0.0133, down 0.4329 gauss (declination 3.55 deg,
+  inclination 63.52 deg, total 0.4836 gauss). Fixed here, never JSBSim's
   wall-clock WMM, so runs are deterministic.
 - GNSS: u-blox M8 class receiver: 2.5 m CEP autonomous -> 2.12 m one-sigma per
   horizontal axis (CEP = 1.1774 sigma), vertical 1.5x horizontal = 3.2 m,
@@ -132,7 +133,7 @@ SECTIONS = {
     "mag": {
         "rate_hz": F("float", 100.0, above=0, unit="Hz"),
         "noise_gauss": F("float", 0.0032, min=0, unit="gauss"),
-        "field_ned_gauss": F("vec3", (0.2136, 0.0131, 0.4312), unit="gauss"),
+        "field_ned_gauss": F("vec3", (0.2152, 0.0133, 0.4329), unit="gauss"),
         "offset_gauss": F("vec3", (0.0, 0.0, 0.0), drawable=True, unit="gauss",
                           text="hard-iron offset, FRD"),
     },
