@@ -7,7 +7,8 @@ or after stop_s (default: never). While on:
   or body FRD, at the CG (f = 0: constant m g A). Forces in one frame add up;
   the bridge writes the summed vector into the JSBSim external force's
   direction with a 1 N magnitude (JSBSim does not renormalise runtime
-  directions), so any number of them costs three property writes per step.
+  directions), so any number of them costs three property writes per step,
+  done by the step kernel before each physics step.
 - gyro_bias: sign * A * axis added to the IMU's gyro, as a step or a linear
   ramp over ramp_s; active biases add up.
 - motor_bias: per-motor thrust (and reaction torque) scale; active biases multiply.
@@ -49,18 +50,18 @@ class Disturbances:
         self._next = 0
         self.next_step = self._switches[0][0] if self._switches else -1
         self._active: dict[int, tuple] = {}   # index -> (d, t_on_s)
-        self._forces = False
         self._ramps = False
         self._force_plan: list = []
         self._force_frames: set = set()
+        self.kernel = None   # attach_kernel(): the simulator's step kernel
         # Fixed 1 N magnitude; the summed force vector (N) goes into the direction.
         for frame in ("ned", "frd"):
             self.fdm.set_dist_force(frame, 1.0, (0.0, 0.0, 0.0))
 
     @property
     def continuous(self) -> bool:
-        """True while something must be recomputed every step."""
-        return self._forces or self._ramps
+        """True while Python must recompute something every step (a gyro ramp)."""
+        return self._ramps
 
     def switch(self, k: int) -> None:
         """Apply the switches due before step k (call when k == next_step)."""
@@ -80,18 +81,23 @@ class Disturbances:
                 self._apply_wind(i if on else None)
         self.next_step = (self._switches[self._next][0] if self._next < len(self._switches) else -1)
         self._plan()
-        self._forces = bool(self._force_plan)
         self._ramps = any(d.type == "gyro_bias" for d, _ in self._active.values())
         for frame in ("ned", "frd"):
             if frame not in self._force_frames:
                 self.fdm.set_dist_force(frame, 1.0, (0.0, 0.0, 0.0))
-        t_s = (k - 1) * self.dt_ns * 1e-9
-        self._update_forces(t_s)
-        self._update_gyro(t_s)
+        # The step kernel writes the active forces before every run() from now on.
+        self.kernel.set_forces(self._force_plan)
+        self._update_gyro((k - 1) * self.dt_ns * 1e-9)
+
+    def attach_kernel(self, kernel) -> None:
+        """The simulator's step kernel, which writes the active forces before each physics
+        step (bridge/src/stepmodule.c set_forces; step_python.py is its reference)."""
+        self.kernel = kernel
+        kernel.set_forces(self._force_plan)
 
     def _plan(self) -> None:
-        """Precompute the per-step work of the active forces (the hot path of S3):
-        per frame, the direction setters and (m g A, 2 pi f, t_on, phase, periodic, axis)."""
+        """The per-step work of the active forces (the hot path of S3) for the kernel: per
+        frame, the direction setters and (m g A, 2 pi f, t_on, phase, periodic, axis)."""
         by_frame: dict[str, list] = {}
         for d, t_on in self._active.values():
             if d.type == "force":
@@ -105,27 +111,9 @@ class Disturbances:
         self._force_frames = set(by_frame)
 
     def update(self, k: int) -> None:
-        """Per step while continuous: forces at the step's start time, gyro ramps."""
-        t_s = (k - 1) * self.dt_ns * 1e-9
-        if self._forces:
-            self._update_forces(t_s)
+        """Per step while a gyro bias ramps (forces are the kernel's)."""
         if self._ramps:
-            self._update_gyro(t_s)
-
-    def _update_forces(self, t_s: float) -> None:
-        # The external force keeps a 1 N magnitude (set at start); the summed force
-        # vector [N] goes into its direction: three writes per frame in use.
-        sin = math.sin
-        for (sx, sy, sz), items in self._force_plan:
-            x = y = z = 0.0
-            for c, w, t_on, phase, periodic, (ax, ay, az) in items:
-                f_n = c * (sin(w * (t_s - t_on) + phase) if periodic else 1.0)
-                x += f_n * ax
-                y += f_n * ay
-                z += f_n * az
-            sx(x)
-            sy(y)
-            sz(z)
+            self._update_gyro((k - 1) * self.dt_ns * 1e-9)
 
     def _update_gyro(self, t_s: float) -> None:
         gyro = [0.0, 0.0, 0.0]

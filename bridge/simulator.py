@@ -149,6 +149,7 @@ class Simulator:
             fdm.h_gear.get_double_value() > 0)
         self.imu.kernel = self.kernel
         self.kernel.set_injected(*self.imu.injected)
+        self.dist.attach_kernel(self.kernel)
         bc, mc = sc.baro, sc.mag
         self.kernel.configure_baro(bc.rate_hz, bc.offset_pa, bc.noise_pa, self._get_temp)
         self.kernel.configure_mag(mc.rate_hz, tuple(mc.field_ned_gauss), tuple(mc.offset_gauss),
@@ -194,7 +195,7 @@ class Simulator:
         dist = self.dist
         if k == dist.next_step:
             dist.switch(k)
-        elif dist._forces or dist._ramps:
+        elif dist._ramps:
             dist.update(k)
         if self._scalar_imu:
             flags = self._kstep(pwm_us)        # IMU, GT_ATT, GT_NAV in slots 0..2

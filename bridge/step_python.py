@@ -13,6 +13,7 @@ Interface shared by both (the simulator is the only caller):
     flags = k.step_gt(pwm, slot)   # oversampled IMU (written by the caller): GT at slot
     k.set_block(block, temps)      # next IMU noise rows (rows, 6) and temperatures (rows)
     k.set_injected(x, y, z)        # injected gyro bias [rad/s]
+    k.set_forces(plan)             # disturbance forces written before each run()
     k.configure_baro(rate_hz, offset_pa, noise_pa, get_temp)      # sample the baro (100 Hz)
     k.configure_mag(rate_hz, field_ned, offset, noise_gauss)      # and the magnetometer
     k.set_baro_block(normals (rows, 1)); k.set_mag_block(normals (rows, 3))
@@ -158,6 +159,7 @@ class Kernel:
         self.injected = [0.0, 0.0, 0.0]
         self._seq = [0, 0, 0]
         self._baro = self._mag = None
+        self._forces: list = []
         self._block = None
         self._temps = None
         self.pos = 0
@@ -177,6 +179,27 @@ class Kernel:
     def seqs(self) -> tuple:
         return (*self._seq, self._baro.seq if self._baro else 0,
                 self._mag.seq if self._mag else 0)
+
+    def set_forces(self, plan) -> None:
+        """[(direction setters (3), [(c_n, w_rad_s, t_on_s, phase_rad, periodic, axis)])]."""
+        if len(plan) > 2:
+            raise ValueError("set_forces: at most 2 frames (ned, frd)")
+        self._forces = [(tuple(sets), [tuple(it) for it in items]) for sets, items in plan]
+
+    def _apply_forces(self, k: int) -> None:
+        # Force [N] = m g A sin(2 pi f (t - t_on) + phase) (or constant) along the axis,
+        # summed per frame into the direction of that frame's 1 N external force.
+        t_s = (k - 1) * self.dt_ns * 1e-9
+        for (sx, sy, sz), items in self._forces:
+            x = y = z = 0.0
+            for c, w, t_on, phase, periodic, (ax, ay, az) in items:
+                f_n = c * (math.sin(w * (t_s - t_on) + phase) if periodic else 1.0)
+                x += f_n * ax
+                y += f_n * ay
+                z += f_n * az
+            sx(x)
+            sy(y)
+            sz(z)
 
     def configure_baro(self, rate_hz, offset_pa, noise_pa, get_temp) -> None:
         self._baro = _LowRate(float(rate_hz))
@@ -212,6 +235,8 @@ class Kernel:
             raise ValueError(f"PWM command contains NaN at step {k}: {list(pwm)}")
         for s, p in zip(self.setters, pwm):
             s(p)
+        if self._forces:
+            self._apply_forces(k)
         self.run()
         self.step_index = k
         sim_ns = k * self.dt_ns

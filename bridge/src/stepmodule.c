@@ -74,6 +74,19 @@ typedef struct {
     uint32_t seq;
 } lowrate_t;
 
+/* A disturbance force (disturbances.py): f = c * sin(w (t - t_on) + phase), or c. */
+typedef struct {
+    double c_n, w_rad_s, t_on_s, phase_rad, axis[3];
+    int periodic;
+} force_item_t;
+
+/* The summed forces of one frame go into the direction of its 1 N external force. */
+typedef struct {
+    PyObject *set[3];         /* bound set_double_value of the direction x, y, z */
+    force_item_t *items;
+    Py_ssize_t n;
+} force_frame_t;
+
 typedef struct {
     PyObject_HEAD
     PyObject *setters[4];     /* bound set_double_value of fcs/m1..4-pwm-us */
@@ -104,6 +117,8 @@ typedef struct {
     PyObject *get_temp;       /* bound getter of atmosphere/T-R (read when baro is due) */
     double baro_offset_pa, baro_noise_pa;
     double mag_field_ned[3], mag_offset[3], mag_noise_gauss;   /* gauss */
+    force_frame_t forces[2];  /* set_forces(): written before each run() */
+    int n_force_frames;
 } Kernel;
 
 static void release(Py_buffer *v)
@@ -112,8 +127,23 @@ static void release(Py_buffer *v)
         PyBuffer_Release(v);
 }
 
+static void clear_forces(Kernel *self)
+{
+    for (int f = 0; f < self->n_force_frames; f++) {
+        for (int i = 0; i < 3; i++)
+            Py_CLEAR(self->forces[f].set[i]);
+        PyMem_Free(self->forces[f].items);
+        self->forces[f].items = NULL;
+        self->forces[f].n = 0;
+    }
+    self->n_force_frames = 0;
+}
+
 static int Kernel_traverse(Kernel *self, visitproc visit, void *arg)
 {
+    for (int f = 0; f < self->n_force_frames; f++)
+        for (int i = 0; i < 3; i++)
+            Py_VISIT(self->forces[f].set[i]);
     for (int i = 0; i < 4; i++)
         Py_VISIT(self->setters[i]);
     Py_VISIT(self->run);
@@ -131,6 +161,7 @@ static int Kernel_clear(Kernel *self)
     for (int i = 0; i < G_COUNT; i++)
         Py_CLEAR(self->getters[i]);
     Py_CLEAR(self->get_temp);
+    clear_forces(self);
     return 0;
 }
 
@@ -277,6 +308,36 @@ static inline void header(sb_record *r, uint16_t kind, uint32_t seq, int64_t sim
 
 static long step_seq(Kernel *self, PyObject *pwm, Py_ssize_t first);
 
+/* Disturbance forces at the start time of step k into their frames' directions. */
+static int apply_forces(Kernel *self, int64_t k)
+{
+    const double t_s = (double)((k - 1) * self->dt_ns) * 1e-9;
+    for (int f = 0; f < self->n_force_frames; f++) {
+        const force_frame_t *fr = &self->forces[f];
+        double v[3] = {0.0, 0.0, 0.0};
+        for (Py_ssize_t i = 0; i < fr->n; i++) {
+            const force_item_t *it = &fr->items[i];
+            const double f_n =
+                it->c_n * (it->periodic ? sin(it->w_rad_s * (t_s - it->t_on_s) + it->phase_rad)
+                                        : 1.0);
+            v[0] += f_n * it->axis[0];
+            v[1] += f_n * it->axis[1];
+            v[2] += f_n * it->axis[2];
+        }
+        for (int j = 0; j < 3; j++) {
+            PyObject *x = PyFloat_FromDouble(v[j]);
+            if (x == NULL)
+                return -1;
+            PyObject *r = PyObject_CallOneArg(fr->set[j], x);
+            Py_DECREF(x);
+            if (r == NULL)
+                return -1;
+            Py_DECREF(r);
+        }
+    }
+    return 0;
+}
+
 /* Run one step; write GT (and the scalar IMU) records from slot `first`; return flags. */
 static long do_step(Kernel *self, PyObject *pwm, Py_ssize_t first)
 {
@@ -315,6 +376,8 @@ static long step_seq(Kernel *self, PyObject *pwm, Py_ssize_t first)
             return -1;
         Py_DECREF(r);
     }
+    if (self->n_force_frames && apply_forces(self, k) < 0)
+        return -1;
     PyObject *r = PyObject_CallNoArgs(self->run);
     if (r == NULL)
         return -1;
@@ -639,6 +702,56 @@ static PyObject *Kernel_set_mag_block(Kernel *self, PyObject *arr)
     return set_noise(&self->mag, arr, 3, "mag noise") < 0 ? NULL : Py_NewRef(Py_None);
 }
 
+/* set_forces([(setters (3 callables), [(c_n, w_rad_s, t_on_s, phase_rad, periodic,
+ *   (ax, ay, az)), ...]), ...]): at most 2 frames; [] clears. */
+static PyObject *Kernel_set_forces(Kernel *self, PyObject *plan)
+{
+    PyObject *frames = PySequence_Fast(plan, "set_forces: a list of (setters, items)");
+    if (frames == NULL)
+        return NULL;
+    clear_forces(self);
+    const Py_ssize_t nf = PySequence_Fast_GET_SIZE(frames);
+    if (nf > 2) {
+        PyErr_SetString(PyExc_ValueError, "set_forces: at most 2 frames (ned, frd)");
+        goto fail;
+    }
+    for (Py_ssize_t f = 0; f < nf; f++) {
+        PyObject *setters, *items;
+        if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(frames, f), "OO", &setters, &items))
+            goto fail;
+        force_frame_t *fr = &self->forces[f];
+        self->n_force_frames = (int)f + 1;
+        if (take_callables(setters, fr->set, 3, "force direction setters") < 0)
+            goto fail;
+        PyObject *its = PySequence_Fast(items, "set_forces: items must be a sequence");
+        if (its == NULL)
+            goto fail;
+        fr->n = PySequence_Fast_GET_SIZE(its);
+        fr->items = PyMem_Calloc((size_t)(fr->n ? fr->n : 1), sizeof *fr->items);
+        if (fr->items == NULL) {
+            Py_DECREF(its);
+            PyErr_NoMemory();
+            goto fail;
+        }
+        for (Py_ssize_t i = 0; i < fr->n; i++) {
+            force_item_t *it = &fr->items[i];
+            if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(its, i), "ddddp(ddd)", &it->c_n,
+                                  &it->w_rad_s, &it->t_on_s, &it->phase_rad, &it->periodic,
+                                  &it->axis[0], &it->axis[1], &it->axis[2])) {
+                Py_DECREF(its);
+                goto fail;
+            }
+        }
+        Py_DECREF(its);
+    }
+    Py_DECREF(frames);
+    Py_RETURN_NONE;
+fail:
+    clear_forces(self);
+    Py_DECREF(frames);
+    return NULL;
+}
+
 static PyObject *Kernel_due(Kernel *self, PyObject *Py_UNUSED(ignored))
 {
     return Py_BuildValue("(LL)", (long long)(self->baro.on ? self->baro.next_ns : -1),
@@ -694,6 +807,9 @@ static PyMethodDef Kernel_methods[] = {
     {"set_mag_block", (PyCFunction)Kernel_set_mag_block, METH_O,
      "set_mag_block((rows, 3) float64 standard normals)"},
     {"due", (PyCFunction)Kernel_due, METH_NOARGS, "(baro next_ns, mag next_ns), -1 when off"},
+    {"set_forces", (PyCFunction)Kernel_set_forces, METH_O,
+     "set_forces([(setters, [(c_n, w_rad_s, t_on_s, phase_rad, periodic, axis)])]): the "
+     "disturbance forces written before each run() (bridge/disturbances.py)"},
     {NULL, NULL, 0, NULL}};
 
 static PyGetSetDef Kernel_getset[] = {
