@@ -83,7 +83,9 @@ def _small_views(arr: np.ndarray) -> list:
 
 
 class FcLoop:
-    """Poll the sensor ring once; see module docstring."""
+    """One FC poll at a time: `poll()` -> records consumed (0: nothing waiting). It is
+    `_poll_c` over the shared-memory segment (unless a sink wants each cycle's arrays)
+    and `_poll_py` otherwise; both keep the same counters and statistics."""
 
     def __init__(self, core, segment, *, supervisor=None, sink=None, batch: int = 8192):
         self.core = core
