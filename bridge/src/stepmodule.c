@@ -12,131 +12,15 @@
  *
  * The maths are step_maths.c; the readable reference with the same interface is
  * bridge/step_python.py. Python objects the kernel calls are held as strong
- * references; the buffers it writes are held through Py_buffer views.
+ * references; the buffers it writes are held through Py_buffer views. The
+ * methods that configure a kernel between steps are in step_config.c.
  */
-#define PY_SSIZE_T_CLEAN
-#include <Python.h>
+#include "step_kernel.h"
 
-#include <math.h>
-#include <string.h>
-
-#include "sb_records.h"
-#include "step_maths.h"
-
-/* State slots (doubles) the kernel leaves in the Python-visible state array. */
-enum {
-    ST_W = 0,          /* 0..2 body rates FRD [rad/s] */
-    ST_F = 3,          /* 3..5 specific force FRD [m/s^2] */
-    ST_EULER = 6,      /* 6..8 phi, theta, psi [rad] */
-    ST_VEL = 9,        /* 9..11 velocity NED [m/s] */
-    ST_LAT = 12,       /* geodetic latitude [rad] */
-    ST_LON = 13,       /* longitude [rad] */
-    ST_HAGL = 14,      /* CG height above ground [m] */
-    ST_OMEGA = 15,     /* 15..18 rotor speeds [rad/s] */
-    ST_ON_GROUND = 19, /* 1.0 while a leg is loaded */
-    ST_BARO_PA = 20,   /* lagged static pressure [Pa] */
-    ST_TEMP_C = 21,    /* IMU die temperature of the last sample [degC] */
-    ST_PREV_VD = 22,   /* down velocity of the step before [m/s] */
-    ST_COS_TILT = 23,  /* cosine of the tilt from level */
-    ST_COUNT = 24
-};
-
-/* Getter order, the contract with bridge/simulator.py (GETTERS there). */
-enum {
-    G_P, G_Q, G_R, G_FBX, G_FBY, G_FBZ, G_PHI, G_THETA, G_PSI, G_VN, G_VE, G_VD,
-    G_LAT, G_LON, G_HAGL, G_O1, G_O2, G_O3, G_O4, G_GEAR, G_PRESSURE, G_COUNT
-};
-
-/* Constants (doubles) in the order of KERNEL_CONSTS in bridge/step_python.py. */
-enum {
-    C_LBF_TO_M_S2, C_FT_M, C_PSF_PA, C_LAT0, C_LON0, C_M_LAT, C_M_LON, C_AGL0,
-    C_DT_S, C_INV_OMEGA_MAX2, C_VIB_A, C_VIB_G, C_RANGE_A, C_RANGE_G, C_BARO_ALPHA,
-    C_COS_CRASH_TILT, C_STRIKE_AGL, C_COUNT
-};
-
-/* Returned flags: the low byte is the number of records written. */
-#define F_SLOW_DUE 0x100      /* sim_ns reached next_slow_ns: baro/mag/GNSS/setpoint */
-#define F_BLOCK_DONE 0x200    /* noise block used up: call set_block before the next step */
-#define F_GROUND_CHANGED 0x400
-#define F_TIPPED 0x800        /* on the ground, tilted past the crash tilt */
-#define F_FLIPPED 0x1000      /* upside down for flip_steps steps */
-#define F_ROTOR_STRIKE 0x2000
-#define F_BARO_BLOCK_DONE 0x4000  /* baro noise used up: set_baro_block before the next step */
-#define F_MAG_BLOCK_DONE 0x8000   /* mag noise used up: set_mag_block */
-
-/* A 100 Hz sensor the kernel samples (lowrate.py documents the models). */
-typedef struct {
-    int on;                   /* configured */
-    double rate_hz;
-    int64_t m, next_ns;       /* sample m is due at next_ns = round(m * 1e9 / rate_hz) */
-    Py_buffer noise;          /* float64 (rows, width): standard normals */
-    Py_ssize_t rows, pos;
-    uint32_t seq;
-} lowrate_t;
-
-/* A disturbance force (disturbances.py): f = c * sin(w (t - t_on) + phase), or c. */
-typedef struct {
-    double c_n, w_rad_s, t_on_s, phase_rad, axis[3];
-    int periodic;
-} force_item_t;
-
-/* The summed forces of one frame go into the direction of its 1 N external force. */
-typedef struct {
-    PyObject *set[3];         /* bound set_double_value of the direction x, y, z */
-    force_item_t *items;
-    Py_ssize_t n;
-} force_frame_t;
-
-typedef struct {
-    PyObject_HEAD
-    PyObject *setters[4];     /* bound set_double_value of fcs/m1..4-pwm-us */
-    PyObject *run;            /* bound FGFDMExec.run */
-    PyObject *getters[G_COUNT];
-    Py_buffer buf_view;       /* the step buffer (bytearray of sb_record slots) */
-    Py_buffer state_view;     /* float64[ST_COUNT] */
-    Py_buffer block_view;     /* float64 (rows, 6): slow bias + white noise */
-    Py_buffer temps_view;     /* float64 (rows): die temperature per step */
-    int have_block;
-    sb_record *slots;
-    Py_ssize_t n_slots;
-    double *st;
-    double c[C_COUNT];
-    sb_imu_consts imu;
-    double phase[4];          /* rotor phases [rad] */
-    double injected[3];       /* injected gyro bias FRD [rad/s] */
-    Py_ssize_t rows, pos;     /* noise block rows, next row */
-    int scalar_imu;           /* 1: one IMU sample per step, written here */
-    int64_t dt_ns;
-    int64_t step_index;
-    int64_t next_slow_ns;
-    uint32_t seq_imu, seq_att, seq_nav;
-    int was_on_ground;
-    double prev_vd;
-    int64_t upside_down_steps, flip_steps;
-    lowrate_t baro, mag;
-    PyObject *get_temp;       /* bound getter of atmosphere/T-R (read when baro is due) */
-    double baro_offset_pa, baro_noise_pa;
-    double mag_field_ned[3], mag_offset[3], mag_noise_gauss;   /* gauss */
-    force_frame_t forces[2];  /* set_forces(): written before each run() */
-    int n_force_frames;
-} Kernel;
-
-static void release(Py_buffer *v)
+void sb_step_release(Py_buffer *v)
 {
     if (v->obj != NULL)
         PyBuffer_Release(v);
-}
-
-static void clear_forces(Kernel *self)
-{
-    for (int f = 0; f < self->n_force_frames; f++) {
-        for (int i = 0; i < 3; i++)
-            Py_CLEAR(self->forces[f].set[i]);
-        PyMem_Free(self->forces[f].items);
-        self->forces[f].items = NULL;
-        self->forces[f].n = 0;
-    }
-    self->n_force_frames = 0;
 }
 
 static int Kernel_traverse(Kernel *self, visitproc visit, void *arg)
@@ -161,7 +45,7 @@ static int Kernel_clear(Kernel *self)
     for (int i = 0; i < G_COUNT; i++)
         Py_CLEAR(self->getters[i]);
     Py_CLEAR(self->get_temp);
-    clear_forces(self);
+    sb_step_clear_forces(self);
     return 0;
 }
 
@@ -169,16 +53,16 @@ static void Kernel_dealloc(Kernel *self)
 {
     PyObject_GC_UnTrack(self);
     Kernel_clear(self);
-    release(&self->buf_view);
-    release(&self->state_view);
-    release(&self->block_view);
-    release(&self->temps_view);
-    release(&self->baro.noise);
-    release(&self->mag.noise);
+    sb_step_release(&self->buf_view);
+    sb_step_release(&self->state_view);
+    sb_step_release(&self->block_view);
+    sb_step_release(&self->temps_view);
+    sb_step_release(&self->baro.noise);
+    sb_step_release(&self->mag.noise);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
-static int take_callables(PyObject *seq, PyObject **out, Py_ssize_t n, const char *what)
+int sb_step_take_callables(PyObject *seq, PyObject **out, Py_ssize_t n, const char *what)
 {
     PyObject *fast = PySequence_Fast(seq, what);
     if (fast == NULL)
@@ -203,7 +87,7 @@ static int take_callables(PyObject *seq, PyObject **out, Py_ssize_t n, const cha
     return 0;
 }
 
-static int get_f64(PyObject *obj, Py_buffer *view, Py_ssize_t min_items, int writable,
+int sb_step_get_f64(PyObject *obj, Py_buffer *view, Py_ssize_t min_items, int writable,
                    const char *what)
 {
     int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
@@ -236,8 +120,8 @@ static int Kernel_init(Kernel *self, PyObject *args, PyObject *kwds)
         PyErr_SetString(PyExc_RuntimeError, "Kernel is already initialised");
         return -1;
     }
-    if (take_callables(setters, self->setters, 4, "setters") < 0 ||
-        take_callables(getters, self->getters, G_COUNT, "getters") < 0)
+    if (sb_step_take_callables(setters, self->setters, 4, "setters") < 0 ||
+        sb_step_take_callables(getters, self->getters, G_COUNT, "getters") < 0)
         return -1;
     if (!PyCallable_Check(run)) {
         PyErr_SetString(PyExc_TypeError, "run must be callable");
@@ -254,15 +138,15 @@ static int Kernel_init(Kernel *self, PyObject *args, PyObject *kwds)
     }
     self->slots = (sb_record *)self->buf_view.buf;
     self->n_slots = self->buf_view.len / (Py_ssize_t)sizeof(sb_record);
-    if (get_f64(state, &self->state_view, ST_COUNT, 1, "state") < 0)
+    if (sb_step_get_f64(state, &self->state_view, ST_COUNT, 1, "state") < 0)
         return -1;
     self->st = (double *)self->state_view.buf;
     Py_buffer cv, pv;
-    if (get_f64(consts, &cv, C_COUNT, 0, "consts") < 0)
+    if (sb_step_get_f64(consts, &cv, C_COUNT, 0, "consts") < 0)
         return -1;
     memcpy(self->c, cv.buf, sizeof self->c);
     PyBuffer_Release(&cv);
-    if (get_f64(phase, &pv, 4, 0, "phase") < 0)
+    if (sb_step_get_f64(phase, &pv, 4, 0, "phase") < 0)
         return -1;
     memcpy(self->phase, pv.buf, sizeof self->phase);
     PyBuffer_Release(&pv);
@@ -580,213 +464,6 @@ static PyObject *Kernel_step_gt(Kernel *self, PyObject *const *args, Py_ssize_t 
     return f < 0 ? NULL : PyLong_FromLong(f);
 }
 
-static PyObject *Kernel_set_block(Kernel *self, PyObject *args)
-{
-    PyObject *block, *temps;
-    if (!PyArg_ParseTuple(args, "OO", &block, &temps))
-        return NULL;
-    Py_buffer bv, tv;
-    if (get_f64(block, &bv, 6, 0, "block") < 0)
-        return NULL;
-    if (bv.ndim != 2 || bv.shape[1] != 6 || get_f64(temps, &tv, bv.shape[0], 0, "temps") < 0) {
-        if (!PyErr_Occurred())
-            PyErr_SetString(PyExc_ValueError, "block must be (rows, 6) float64");
-        PyBuffer_Release(&bv);
-        return NULL;
-    }
-    release(&self->block_view);
-    release(&self->temps_view);
-    self->block_view = bv;
-    self->temps_view = tv;
-    self->rows = bv.shape[0];
-    self->pos = 0;
-    self->have_block = 1;
-    Py_RETURN_NONE;
-}
-
-static PyObject *Kernel_set_injected(Kernel *self, PyObject *const *args, Py_ssize_t nargs)
-{
-    if (nargs != 3) {
-        PyErr_SetString(PyExc_TypeError, "set_injected(x, y, z) [rad/s]");
-        return NULL;
-    }
-    for (int i = 0; i < 3; i++) {
-        double v = PyFloat_AsDouble(args[i]);
-        if (v == -1.0 && PyErr_Occurred())
-            return NULL;
-        self->injected[i] = v;
-    }
-    Py_RETURN_NONE;
-}
-
-static PyObject *Kernel_seqs(Kernel *self, PyObject *Py_UNUSED(ignored))
-{
-    return Py_BuildValue("(kkkkk)", (unsigned long)self->seq_imu, (unsigned long)self->seq_att,
-                         (unsigned long)self->seq_nav, (unsigned long)self->baro.seq,
-                         (unsigned long)self->mag.seq);
-}
-
-static int set_noise(lowrate_t *lr, PyObject *arr, Py_ssize_t width, const char *what)
-{
-    Py_buffer v;
-    if (get_f64(arr, &v, width, 0, what) < 0)
-        return -1;
-    if (v.ndim != 2 || v.shape[1] != width) {
-        PyErr_Format(PyExc_ValueError, "%s must be (rows, %zd) float64", what, width);
-        PyBuffer_Release(&v);
-        return -1;
-    }
-    release(&lr->noise);
-    lr->noise = v;
-    lr->rows = v.shape[0];
-    lr->pos = 0;
-    return 0;
-}
-
-static int start_schedule(lowrate_t *lr, double rate_hz)
-{
-    if (!(rate_hz > 0.0)) {
-        PyErr_SetString(PyExc_ValueError, "rate_hz must be > 0");
-        return -1;
-    }
-    lr->rate_hz = rate_hz;
-    lr->m = 1;
-    lr->next_ns = sb_due_ns(1, rate_hz);
-    lr->on = 1;
-    return 0;
-}
-
-/* configure_baro(rate_hz, offset_pa, noise_pa, get_temp) */
-static PyObject *Kernel_configure_baro(Kernel *self, PyObject *args)
-{
-    double rate, off, noise;
-    PyObject *get_temp;
-    if (!PyArg_ParseTuple(args, "dddO", &rate, &off, &noise, &get_temp))
-        return NULL;
-    if (!PyCallable_Check(get_temp)) {
-        PyErr_SetString(PyExc_TypeError, "get_temp must be callable");
-        return NULL;
-    }
-    if (start_schedule(&self->baro, rate) < 0)
-        return NULL;
-    self->baro_offset_pa = off;
-    self->baro_noise_pa = noise;
-    Py_INCREF(get_temp);
-    Py_XSETREF(self->get_temp, get_temp);
-    Py_RETURN_NONE;
-}
-
-/* configure_mag(rate_hz, field_ned (3), offset (3), noise_gauss) */
-static PyObject *Kernel_configure_mag(Kernel *self, PyObject *args)
-{
-    double rate, noise;
-    double f[3], o[3];
-    if (!PyArg_ParseTuple(args, "d(ddd)(ddd)d", &rate, &f[0], &f[1], &f[2], &o[0], &o[1], &o[2],
-                          &noise))
-        return NULL;
-    if (start_schedule(&self->mag, rate) < 0)
-        return NULL;
-    memcpy(self->mag_field_ned, f, sizeof f);
-    memcpy(self->mag_offset, o, sizeof o);
-    self->mag_noise_gauss = noise;
-    Py_RETURN_NONE;
-}
-
-static PyObject *Kernel_set_baro_block(Kernel *self, PyObject *arr)
-{
-    return set_noise(&self->baro, arr, 1, "baro noise") < 0 ? NULL : Py_NewRef(Py_None);
-}
-
-static PyObject *Kernel_set_mag_block(Kernel *self, PyObject *arr)
-{
-    return set_noise(&self->mag, arr, 3, "mag noise") < 0 ? NULL : Py_NewRef(Py_None);
-}
-
-/* set_forces([(setters (3 callables), [(c_n, w_rad_s, t_on_s, phase_rad, periodic,
- *   (ax, ay, az)), ...]), ...]): at most 2 frames; [] clears. */
-static PyObject *Kernel_set_forces(Kernel *self, PyObject *plan)
-{
-    PyObject *frames = PySequence_Fast(plan, "set_forces: a list of (setters, items)");
-    if (frames == NULL)
-        return NULL;
-    clear_forces(self);
-    const Py_ssize_t nf = PySequence_Fast_GET_SIZE(frames);
-    if (nf > 2) {
-        PyErr_SetString(PyExc_ValueError, "set_forces: at most 2 frames (ned, frd)");
-        goto fail;
-    }
-    for (Py_ssize_t f = 0; f < nf; f++) {
-        PyObject *setters, *items;
-        if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(frames, f), "OO", &setters, &items))
-            goto fail;
-        force_frame_t *fr = &self->forces[f];
-        self->n_force_frames = (int)f + 1;
-        if (take_callables(setters, fr->set, 3, "force direction setters") < 0)
-            goto fail;
-        PyObject *its = PySequence_Fast(items, "set_forces: items must be a sequence");
-        if (its == NULL)
-            goto fail;
-        fr->n = PySequence_Fast_GET_SIZE(its);
-        fr->items = PyMem_Calloc((size_t)(fr->n ? fr->n : 1), sizeof *fr->items);
-        if (fr->items == NULL) {
-            Py_DECREF(its);
-            PyErr_NoMemory();
-            goto fail;
-        }
-        for (Py_ssize_t i = 0; i < fr->n; i++) {
-            force_item_t *it = &fr->items[i];
-            if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(its, i), "ddddp(ddd)", &it->c_n,
-                                  &it->w_rad_s, &it->t_on_s, &it->phase_rad, &it->periodic,
-                                  &it->axis[0], &it->axis[1], &it->axis[2])) {
-                Py_DECREF(its);
-                goto fail;
-            }
-        }
-        Py_DECREF(its);
-    }
-    Py_DECREF(frames);
-    Py_RETURN_NONE;
-fail:
-    clear_forces(self);
-    Py_DECREF(frames);
-    return NULL;
-}
-
-static PyObject *Kernel_due(Kernel *self, PyObject *Py_UNUSED(ignored))
-{
-    return Py_BuildValue("(LL)", (long long)(self->baro.on ? self->baro.next_ns : -1),
-                         (long long)(self->mag.on ? self->mag.next_ns : -1));
-}
-
-static PyObject *Kernel_get_next_slow(Kernel *self, void *closure)
-{
-    (void)closure;
-    return PyLong_FromLongLong(self->next_slow_ns);
-}
-
-static int Kernel_set_next_slow(Kernel *self, PyObject *v, void *closure)
-{
-    (void)closure;
-    long long x = v ? PyLong_AsLongLong(v) : -1;
-    if (x == -1 && PyErr_Occurred())
-        return -1;
-    self->next_slow_ns = x;
-    return 0;
-}
-
-static PyObject *Kernel_get_pos(Kernel *self, void *closure)
-{
-    (void)closure;
-    return PyLong_FromSsize_t(self->pos);
-}
-
-static PyObject *Kernel_get_phase(Kernel *self, void *closure)
-{
-    (void)closure;
-    return Py_BuildValue("[dddd]", self->phase[0], self->phase[1], self->phase[2],
-                         self->phase[3]);
-}
-
 static PyMethodDef Kernel_methods[] = {
     {"step", (PyCFunction)(void (*)(void))Kernel_step, METH_FASTCALL,
      "step(pwm) -> flags: run one physics step, write IMU, GT_ATT, GT_NAV from slot 0"},
@@ -812,13 +489,6 @@ static PyMethodDef Kernel_methods[] = {
      "disturbance forces written before each run() (bridge/disturbances.py)"},
     {NULL, NULL, 0, NULL}};
 
-static PyGetSetDef Kernel_getset[] = {
-    {"next_slow_ns", (getter)Kernel_get_next_slow, (setter)Kernel_set_next_slow,
-     "sim time [ns] from which step flags F_SLOW_DUE", NULL},
-    {"pos", (getter)Kernel_get_pos, NULL, "next row of the noise block", NULL},
-    {"phase", (getter)Kernel_get_phase, NULL, "rotor phases [rad]", NULL},
-    {NULL, NULL, NULL, NULL, NULL}};
-
 static PyTypeObject KernelType = {
     PyVarObject_HEAD_INIT(NULL, 0)
     .tp_name = "silbridge.bridge._step.Kernel",
@@ -831,7 +501,7 @@ static PyTypeObject KernelType = {
     .tp_traverse = (traverseproc)Kernel_traverse,
     .tp_clear = (inquiry)Kernel_clear,
     .tp_methods = Kernel_methods,
-    .tp_getset = Kernel_getset,
+    .tp_getset = sb_step_getset,
 };
 
 static struct PyModuleDef stepmodule = {
