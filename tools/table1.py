@@ -61,13 +61,19 @@ def aggregate(results, group=lambda r: scenario_key(r.spec.scenario)) -> dict:
     return {"scenarios": table}
 
 
+def _num(fmt: str, v: float) -> str:
+    """fmt.format(v), without the sign of a value that rounds to zero ("-0.00" -> "0.00")."""
+    text = fmt.format(v)
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text
+
+
 def _cell(stat: dict | None, fmt: str) -> str:
     if not stat or stat.get("mean") is None:
         return "n/a"
     m, s = stat["mean"], stat["std"]
     if s is None or (isinstance(s, float) and math.isnan(s)):
-        return fmt.format(m)
-    return f"{fmt.format(m)} ± {fmt.format(s)}"
+        return _num(fmt, m)
+    return f"{_num(fmt, m)} ± {_num(fmt, s)}"
 
 
 def markdown(table: dict, *, paper: bool = True, title: str = "Table 1") -> str:

@@ -79,3 +79,10 @@ def test_bench_refuses_bad_arguments(tmp_path):
     p = subprocess.run([sys.executable, "-m", "silbridge.tools", "bench", "--runs", "0",
                         "--out", str(tmp_path)], capture_output=True, text=True)
     assert p.returncode == 2 and "--runs" in p.stderr
+
+
+def test_table_cells_never_show_a_negative_zero():
+    from silbridge.tools.table1 import _cell
+    assert _cell({"mean": -0.0003, "std": 0.0004}, "{:.2f}") == "0.00 ± 0.00"
+    assert _cell({"mean": -0.3, "std": 0.1}, "{:.2f}") == "-0.30 ± 0.10"
+    assert _cell(None, "{:.2f}") == "n/a"
