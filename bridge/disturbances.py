@@ -50,18 +50,13 @@ class Disturbances:
         self._next = 0
         self.next_step = self._switches[0][0] if self._switches else -1
         self._active: dict[int, tuple] = {}   # index -> (d, t_on_s)
-        self._ramps = False
+        self.ramping = False   # a gyro bias ramps: update(k) every step until it ends
         self._force_plan: list = []
         self._force_frames: set = set()
         self.kernel = None   # attach_kernel(): the simulator's step kernel
         # Fixed 1 N magnitude; the summed force vector (N) goes into the direction.
         for frame in ("ned", "frd"):
             self.fdm.set_dist_force(frame, 1.0, (0.0, 0.0, 0.0))
-
-    @property
-    def continuous(self) -> bool:
-        """True while Python must recompute something every step (a gyro ramp)."""
-        return self._ramps
 
     def switch(self, k: int) -> None:
         """Apply the switches due before step k (call when k == next_step)."""
@@ -81,7 +76,7 @@ class Disturbances:
                 self._apply_wind(i if on else None)
         self.next_step = (self._switches[self._next][0] if self._next < len(self._switches) else -1)
         self._plan()
-        self._ramps = any(d.type == "gyro_bias" for d, _ in self._active.values())
+        self.ramping = any(d.type == "gyro_bias" for d, _ in self._active.values())
         for frame in ("ned", "frd"):
             if frame not in self._force_frames:
                 self.fdm.set_dist_force(frame, 1.0, (0.0, 0.0, 0.0))
@@ -112,7 +107,7 @@ class Disturbances:
 
     def update(self, k: int) -> None:
         """Per step while a gyro bias ramps (forces are the kernel's)."""
-        if self._ramps:
+        if self.ramping:
             self._update_gyro((k - 1) * self.dt_ns * 1e-9)
 
     def _update_gyro(self, t_s: float) -> None:
@@ -129,7 +124,7 @@ class Disturbances:
             for j in range(3):
                 gyro[j] += a * d.axis[j]
         self.imu.set_injected_gyro_bias(gyro)
-        self._ramps = ramping
+        self.ramping = ramping
 
     def _apply_motor_bias(self) -> None:
         scale = [1.0, 1.0, 1.0, 1.0]

@@ -143,12 +143,11 @@ class ImuModel:
         vw[8:12, 5] = 0.5 * cfg.vib_gyro    # g_z
         self._vib_w = vw
         # Current block: slow biases (turn-on + temperature + walk, gyro then accel)
-        # and die temperature per step; for the scalar path also the slow biases
-        # plus the step's white noise, flattened into one list.
+        # and die temperature per step (the block path's; the step kernel gets its
+        # own rows from next_scalar_block).
         self._slow = np.zeros((0, 6))
         self._temps: list = []
         self._pos = 0
-        self._stoch = None
         # The simulator's step kernel, which samples the one-per-step IMU (None: unattached).
         self.kernel = None
 
@@ -169,7 +168,9 @@ class ImuModel:
         j = self.injected
         return [row[0] + j[0], row[1] + j[1], row[2] + j[2], row[3], row[4], row[5]]
 
-    def _next_block(self, scalar: bool) -> None:
+    def _next_block(self) -> np.ndarray:
+        """Slow biases of the next block of physics steps into _slow; their die
+        temperatures are returned (and kept in _temps for the block path)."""
         walk = self.walk.next_block()
         rows = walk.shape[0]
         s = np.arange(self._steps_done + 1, self._steps_done + rows + 1)
@@ -179,15 +180,14 @@ class ImuModel:
         self._slow = walk + self._turn_on + np.multiply.outer(temps - TEMP_REF_C, self._tempco)
         self._temps = temps.tolist()
         self._pos = 0
-        if scalar:
-            self._stoch = np.ascontiguousarray(self._slow + self.white.next_block())
+        return temps
 
     def next_scalar_block(self) -> tuple:
         """The next block for the one-sample-per-step path (the step kernel samples):
         (slow biases + white noise (rows, 6) gyro xyz then accel xyz, die temperature
         (rows)). The maths of a sample are in bridge/step_python.py imu_scalar."""
-        self._next_block(True)
-        return self._stoch, np.asarray(self._temps)
+        temps = self._next_block()
+        return np.ascontiguousarray(self._slow + self.white.next_block()), temps
 
     def step_block(self, prev6, cur6, frac_col: np.ndarray, o1, o2, o3, o4,
                    out: np.ndarray) -> None:
@@ -203,7 +203,7 @@ class ImuModel:
         weights x (omega / omega_max)^2] goes straight into `out`; the pre-scaled
         white noise is added there."""
         if self._pos >= self._slow.shape[0]:
-            self._next_block(False)
+            self._next_block()
         pos = self._pos
         self._pos = pos + 1
         self.temp_c = t = self._temps[pos]

@@ -26,20 +26,22 @@ from silbridge.bridge.noise import NormalRows
 from silbridge.mavlink import hil_quant
 
 
+def due_ns(m: int, rate_hz: float) -> int:
+    """Sample m (1, 2, ...) of a periodic sensor is due at round(m * 1e9 / rate_hz) ns."""
+    return int(round(m * 1e9 / rate_hz))
+
+
 class Schedule:
     """Due times of a periodic sensor in integer nanoseconds."""
 
     def __init__(self, rate_hz: float):
         self.rate_hz = rate_hz
         self.m = 1
-        self.next_ns = self._due(1)
-
-    def _due(self, m: int) -> int:
-        return int(round(m * 1e9 / self.rate_hz))
+        self.next_ns = due_ns(1, rate_hz)
 
     def advance(self) -> None:
         self.m += 1
-        self.next_ns = self._due(self.m)
+        self.next_ns = due_ns(self.m, self.rate_hz)
 
 
 class Baro:

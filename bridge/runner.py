@@ -75,7 +75,6 @@ class BridgeLoop:
         self._log_pwm = getattr(sink, "pwm_records", None) if sink is not None else None
         raw = memoryview(self._pwm_buf.view(np.uint8))
         self._pwm_raw = raw
-        self._pwm_u8 = raw
         self._pwm_u16 = raw.cast("H")
         self._pwm_i64 = raw.cast("q")
 
@@ -111,7 +110,7 @@ class BridgeLoop:
         u16, i64 = self._pwm_u16, self._pwm_i64
         b = last * 32 + 12                       # pwm_us[0..3]: payload bytes 0..7
         self.pwm_us = (u16[b], u16[b + 1], u16[b + 2], u16[b + 3])
-        self.armed = bool(self._pwm_u8[last * 64 + 41])
+        self.armed = bool(self._pwm_raw[last * 64 + 41])
         st = self.stats
         if st.pwm_first_sim_ns < 0:
             st.pwm_first_sim_ns = i64[1]

@@ -127,8 +127,6 @@ class Simulator:
         self._get_temp = gd(fdm.h_temp)
         # specific force [m/s^2] = force [lbf] / mass [slug] * ft->m
         self._lbf_to_m_s2 = FT_M / (fdm.mass_kg / SLUG_KG)
-        self._home = (fdm.home_lat_rad, fdm.home_lon_rad, fdm.m_per_rad_lat, fdm.m_per_rad_lon,
-                      fdm.home_agl_m)
         consts = {"lbf_to_m_s2": self._lbf_to_m_s2, "ft_m": FT_M, "psf_pa": PSF_PA,
                   "lat0": fdm.home_lat_rad, "lon0": fdm.home_lon_rad,
                   "m_lat": fdm.m_per_rad_lat, "m_lon": fdm.m_per_rad_lon,
@@ -195,7 +193,7 @@ class Simulator:
         dist = self.dist
         if k == dist.next_step:
             dist.switch(k)
-        elif dist._ramps:
+        elif dist.ramping:
             dist.update(k)
         if self._scalar_imu:
             flags = self._kstep(pwm_us)        # IMU, GT_ATT, GT_NAV in slots 0..2

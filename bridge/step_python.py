@@ -2,9 +2,10 @@
 
 One physics step: write the four pulse widths into JSBSim, run it, read the state back,
 and write the step's IMU (when one sample per step), GT_ATT and GT_NAV records into the
-step buffer, then the baro and magnetometer records when due. The C kernel (`silbridge.bridge._step.Kernel`) does the same with the same
-operation order and gives byte-identical records (tests/bridge/test_step_kernel.py); it
-runs in production because this version costs ~4 us more per step. Read this one.
+step buffer, then the baro and magnetometer records when due. The C kernel
+(`silbridge.bridge._step.Kernel`) does the same with the same operation order and gives
+byte-identical records (tests/bridge/test_step_kernel.py); it runs in production because
+this version costs ~4 us more per step. Read this one.
 
 Interface shared by both (the simulator is the only caller):
     k = Kernel(buffer, setters, run, getters, state, consts, phase, dt_ns, flip_steps,
@@ -28,6 +29,7 @@ import math
 
 from silbridge.bridge import step_buffer as sb
 from silbridge.bridge.frames import ned_to_frd, quat_from_euler
+from silbridge.bridge.lowrate import due_ns
 from silbridge.mavlink.hil_quant import pressure_pa
 from silbridge.shm.records import FLAG_STEP_END
 
@@ -71,11 +73,6 @@ def quant_velocity_m_s(v: float) -> float:
         return v
     cm = v if math.isinf(v) else float(round(v * 100.0))
     return max(-32767.0, min(32767.0, cm)) / 100.0
-
-
-def due_ns(m: int, rate_hz: float) -> int:
-    """Sample m of a periodic sensor is due at round(m * 1e9 / rate_hz) ns (lowrate.py)."""
-    return int(round(m * 1e9 / rate_hz))
 
 
 class _LowRate:
@@ -164,10 +161,6 @@ class Kernel:
         self._temps = None
         self.pos = 0
 
-    @property
-    def phase(self) -> list:
-        return list(self._phase)
-
     def set_block(self, block, temps) -> None:
         self._block = block.tolist()
         self._temps = temps.tolist()
@@ -215,9 +208,6 @@ class Kernel:
 
     def set_mag_block(self, block) -> None:
         self._mag.noise, self._mag.pos = block.tolist(), 0
-
-    def due(self) -> tuple:
-        return (self._baro.next_ns if self._baro else -1, self._mag.next_ns if self._mag else -1)
 
     def step(self, pwm) -> int:
         if not self.scalar_imu:

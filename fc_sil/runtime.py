@@ -43,19 +43,25 @@ class FcLost(Exception):
 class _Series:
     """Bounded int64 sample store (keeps the newest `cap` samples, cap a power of two).
 
-    A memoryview over a numpy array: storing a Python int through it costs ~30 ns
-    against ~90 ns for a numpy element, and the poll loop stores three per poll;
-    np.zeros pages are mapped lazily, so an idle store costs no start-up time."""
+    Its count lives in a slot of the loop's counter array (words[index]), which the C
+    poll updates too. A memoryview over a numpy array: storing a Python int through it
+    costs ~30 ns against ~90 ns for a numpy element; np.zeros pages are mapped lazily,
+    so an idle store costs no start-up time."""
 
-    def __init__(self, cap: int = 1 << 20):
+    def __init__(self, words, index: int, cap: int = 1 << 20):
         self._arr = np.zeros(cap, dtype=np.int64)
         self.buf = memoryview(self._arr)
         self.mask = cap - 1
-        self.n = 0
+        self._words, self._index = words, index
 
     def add(self, v: int) -> None:
-        self.buf[self.n & self.mask] = v
-        self.n += 1
+        w, i = self._words, self._index
+        self.buf[w[i] & self.mask] = v
+        w[i] += 1
+
+    @property
+    def n(self) -> int:
+        return self._words[self._index]
 
     def values(self) -> np.ndarray:
         return self._arr[: min(self.n, len(self._arr))].copy()
@@ -68,7 +74,7 @@ class _Series:
         return {f"p{q}": float(x) for q, x in zip(qs, p)}
 
 
-# The C poll's counters (fc_sil/ext/core_object.h FC_IO_*).
+# The loop's counters, kept by either poll (the C poll's FC_IO_*, fc_sil/ext/core_object.h).
 (_IO_LAST_SIM_NS, _IO_LAST_K, _IO_POLLS, _IO_RECORDS, _IO_PWM_PUBLISHED, _IO_N_LATENCY,
  _IO_N_PERIOD, _IO_N_E2E, _IO_WORDS) = range(9)
 # With the C poll, the log's batch boundaries are cut every this many polls.
@@ -115,44 +121,35 @@ class FcLoop:
         self._pop_into = segment.sensors.pop_into
         self._push_pwm = segment.actuators.push_batch
         self._set_word = segment.set_word
-        self.latency_ns = _Series()
-        self.period_ns = _Series()
-        self.e2e_ns = _Series()
-        self._polls = 0
-        self._records = 0
-        self._pwm_published = 0
+        # Counters (_IO_* slots) shared by both polls; the C poll writes them in place.
+        self._io = np.zeros(_IO_WORDS, dtype=np.int64)
+        self._iow = memoryview(self._io)
+        self.latency_ns = _Series(self._iow, _IO_N_LATENCY)
+        self.period_ns = _Series(self._iow, _IO_N_PERIOD)
+        self.e2e_ns = _Series(self._iow, _IO_N_E2E)
         self._prev_consume = 0
-        self._last_sim_ns = 0
-        # The C poll (shared memory, FC side): its counters land in _io (IO_* slots).
+        # The C poll (shared memory, FC side), attached on first use.
         self._c_api = getattr(segment, "_c_api", None)
-        self._io = None
+        self._c_attached = False
         self._flush = None
         self._flush_in = 0
         self.sink = sink
 
-    # Counters: kept by the C poll in _io, or by the Python poll in attributes.
     @property
     def last_sim_ns(self) -> int:
-        return self._iow[_IO_LAST_SIM_NS] if self._io is not None else self._last_sim_ns
+        return self._iow[_IO_LAST_SIM_NS]
 
     @property
     def polls(self) -> int:
-        return self._iow[_IO_POLLS] if self._io is not None else self._polls
+        return self._iow[_IO_POLLS]
 
     @property
     def records(self) -> int:
-        return self._iow[_IO_RECORDS] if self._io is not None else self._records
+        return self._iow[_IO_RECORDS]
 
     @property
     def pwm_published(self) -> int:
-        return self._iow[_IO_PWM_PUBLISHED] if self._io is not None else self._pwm_published
-
-    def _sync_series(self) -> None:
-        if self._io is not None:
-            w = self._iow
-            self.latency_ns.n = w[_IO_N_LATENCY]
-            self.period_ns.n = w[_IO_N_PERIOD]
-            self.e2e_ns.n = w[_IO_N_E2E]
+        return self._iow[_IO_PWM_PUBLISHED]
 
     def _use_c_poll(self, capture) -> bool:
         """Poll in C when the link is the shm segment and the sink (if any) captures."""
@@ -160,30 +157,18 @@ class FcLoop:
         # Only the extension's own Core (a test may wrap it to filter records).
         if self._c_api is None or (self._sink is not None and capture is None) or \
                 not isinstance(c, _core.Core):
-            if self._io is not None:
-                self._leave_c_poll()
+            self._detach_c_poll()
             return False
-        if self._io is None:
-            self._io = np.zeros(_IO_WORDS, dtype=np.int64)
-            self._iow = memoryview(self._io)
+        if not self._c_attached:
             c.attach_io(self._c_api(), ls.FC_SIM_NS, self.latency_ns._arr,
                         self.period_ns._arr, self.e2e_ns._arr, self._io)
-            self._io[_IO_LAST_SIM_NS] = self._last_sim_ns
-            self._io[_IO_POLLS] = self._polls
-            self._io[_IO_RECORDS] = self._records
-            self._io[_IO_PWM_PUBLISHED] = self._pwm_published
-            self._io[_IO_N_LATENCY] = self.latency_ns.n
-            self._io[_IO_N_PERIOD] = self.period_ns.n
-            self._io[_IO_N_E2E] = self.e2e_ns.n
+            self._c_attached = True
         return True
 
-    def _leave_c_poll(self) -> None:
-        self._sync_series()
-        w = self._iow
-        self._last_sim_ns, self._polls = w[_IO_LAST_SIM_NS], w[_IO_POLLS]
-        self._records, self._pwm_published = w[_IO_RECORDS], w[_IO_PWM_PUBLISHED]
-        self.core._c.attach_io(None)
-        self._io = None
+    def _detach_c_poll(self) -> None:
+        if self._c_attached:
+            self.core._c.attach_io(None)
+            self._c_attached = False
 
     @property
     def sink(self):
@@ -235,29 +220,24 @@ class FcLoop:
         i = (n - 1) * 8
         newest_sim = self._i64[i + 1]
         newest_wall = self._i64[i + 2]
+        w = self._iow
         pwm_wall = 0
         if k:
             self._push_pwm(self._pwms[k] if k < _SMALL else self._pwm_out[:k])
             pwm_wall = monotonic_ns()
-            self._pwm_published += k
-            e2e = self.e2e_ns
-            e2e.buf[e2e.n & e2e.mask] = pwm_wall - newest_wall
-            e2e.n += 1
+            w[_IO_PWM_PUBLISHED] += k
+            self.e2e_ns.add(pwm_wall - newest_wall)
         if self._u16[(n - 1) * 32 + 1] & FLAG_STEP_END:
-            self._last_sim_ns = newest_sim
+            w[_IO_LAST_SIM_NS] = newest_sim
             self._set_word(ls.FC_SIM_NS, newest_sim)
-        lat = self.latency_ns
-        lat.buf[lat.n & lat.mask] = consume - newest_wall
-        lat.n += 1
+        self.latency_ns.add(consume - newest_wall)
         period = 0
         if self._prev_consume:
             period = consume - self._prev_consume
-            per = self.period_ns
-            per.buf[per.n & per.mask] = period
-            per.n += 1
+            self.period_ns.add(period)
         self._prev_consume = consume
-        self._polls += 1
-        self._records += n
+        w[_IO_POLLS] += 1
+        w[_IO_RECORDS] += n
         if self._tick is not None:
             self._tick(newest_sim, newest_wall, consume, pwm_wall, period)
             sink = None
@@ -277,13 +257,11 @@ class FcLoop:
 
     def close(self) -> None:
         """Detach the C poll from the segment (before the segment closes)."""
-        if self._io is not None:
-            self._leave_c_poll()
+        self._detach_c_poll()
         self.poll = self._poll_py
 
     def summary(self, nominal_period_ns: float | None = None) -> dict:
         """Latency and jitter figures (us) for the run summary."""
-        self._sync_series()
         periods = self.period_ns.values()
         if nominal_period_ns is None and len(periods):
             nominal_period_ns = float(np.median(periods))

@@ -197,13 +197,19 @@ class MissionProtocol:
                    up.last_progress_s + self.upload_timeout_s)
 
     # -- download ---------------------------------------------------------------------------------
-    def _request_list(self, link, msg) -> None:
-        partner = self._partner(msg)
-        if msg.mission_type != mav.MAV_MISSION_TYPE_MISSION:
+    def _refused(self, link, partner, msg, types=(mav.MAV_MISSION_TYPE_MISSION,)) -> bool:
+        """ACK and refuse a download or clear of another mission type, or during an upload."""
+        if msg.mission_type not in types:
             self._ack(link, partner, mav.MAV_MISSION_UNSUPPORTED, msg.mission_type)
-            return
+            return True
         if self._upload is not None:
             self._ack(link, partner, mav.MAV_MISSION_DENIED, msg.mission_type)
+            return True
+        return False
+
+    def _request_list(self, link, msg) -> None:
+        partner = self._partner(msg)
+        if self._refused(link, partner, msg):
             return
         self.tx.send(link, mav.MAVLink_mission_count_message(
             partner[0], partner[1], self.store.count(), msg.mission_type))
@@ -223,11 +229,7 @@ class MissionProtocol:
 
     def _send_item(self, link, msg, as_int: bool) -> None:
         partner = self._partner(msg)
-        if msg.mission_type != mav.MAV_MISSION_TYPE_MISSION:
-            self._ack(link, partner, mav.MAV_MISSION_UNSUPPORTED, msg.mission_type)
-            return
-        if self._upload is not None:
-            self._ack(link, partner, mav.MAV_MISSION_DENIED, msg.mission_type)
+        if self._refused(link, partner, msg):
             return
         it = self.download_item(msg.seq)
         if it is None:
@@ -249,11 +251,8 @@ class MissionProtocol:
     # -- clear ------------------------------------------------------------------------------------
     def _clear(self, link, msg) -> None:
         partner = self._partner(msg)
-        if msg.mission_type not in (mav.MAV_MISSION_TYPE_MISSION, mav.MAV_MISSION_TYPE_ALL):
-            self._ack(link, partner, mav.MAV_MISSION_UNSUPPORTED, msg.mission_type)
-            return
-        if self._upload is not None:
-            self._ack(link, partner, mav.MAV_MISSION_DENIED, msg.mission_type)
+        if self._refused(link, partner, msg,
+                         (mav.MAV_MISSION_TYPE_MISSION, mav.MAV_MISSION_TYPE_ALL)):
             return
         self.store.clear()
         self._ack(link, partner, mav.MAV_MISSION_ACCEPTED, msg.mission_type)

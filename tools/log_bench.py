@@ -3,10 +3,11 @@
 Two measurements, because a writer's cost depends on where it runs:
 
 1. Synthetic replay: a synthetic run (tools/log_synth.py) at IMU 1 kHz is
-   replayed the way the closed loop logs: per physics step the sensor and
-   ground-truth records the FC consumed, its status rows, the timing row and
-   the PWM records, either as four calls (`write_records`, `write`, `pack`,
-   `write_records`, as tools/run_log.py does) or as one `write_cycle`. Hot
+   replayed the way a Python loop logs (the MAVLink HIL links' FC loop): per
+   physics step the sensor and ground-truth records the FC consumed, its status
+   rows, the timing row and the PWM records, either as four calls
+   (`write_records`, `write`, `pack`, `write_records`) or as one `write_cycle`
+   (tools/run_log.py). Hot
    caches, so this is the writer's floor. Also bulk writes (ns per row), file
    size and the time `read_log` takes to read every channel back.
 2. Real loop A/B: `silbridge fly --processes 1` itself, alternately without and

@@ -203,7 +203,6 @@ class LogWriter:
         self._unknown: dict[int, int] = {}
         # write_cycle's cached views of the /fc/status and /timing queues.
         self._st_dtype = self._st_pending = self._st_limit = None
-        self._cycle_pwm = False     # cycle_hook(): log the PWM passed to the hook
         self._capture_rebind = None  # capture by a C producer (capture_targets)
         self._capture_ticks = 0
         self._tm_pack = self._tm_pending = self._tm_limit = None
@@ -297,14 +296,36 @@ class LogWriter:
         the channels' queues are cached on the writer, so this is a handful of
         copies and comparisons.
         """
-        self._cycle(records, pwm, status, timing, pwm is not None)
-
-    def cycle_hook(self, log_pwm: bool):
-        """The FC loop's sink hook, hook(records, pwm, status, timing): write_cycle
-        without a wrapper frame (a Python call is a tenth of the logging cost per
-        cycle). log_pwm: also log the PWM records (when the bridge's side cannot)."""
-        self._cycle_pwm = log_pwm
-        return self._cycle
+        if records.itemsize != RECORD_SIZE:
+            raise ValueError(f"records are {RECORD_SIZE} bytes, got {records.itemsize}")
+        stage = self._stage
+        stage.extend(records)       # the buffer itself: no intermediate bytes object
+        if status is not None and len(status):
+            if status.dtype is self._st_dtype:
+                pending = self._st_pending
+                pending.extend(status)
+                if len(pending) >= self._st_limit:
+                    self._streams[STATUS_CHANNEL].drain()
+            else:  # first status rows (opens and caches the channel), or a wrong dtype
+                self.write(STATUS_CHANNEL, status)
+                st = self._streams[STATUS_CHANNEL]
+                self._st_dtype, self._st_pending, self._st_limit = \
+                    st.in_dtype, st.pending, st.batch_bytes
+        if timing is not None:
+            if self._tm_pack is None:
+                tm = self._streams.get(TIMING_CHANNEL) or self._open(TIMING_CHANNEL, TIMING_DTYPE)
+                self._tm_pack, self._tm_pending, self._tm_limit = \
+                    tm.packer.pack, tm.pending, tm.batch_bytes
+            pending = self._tm_pending
+            pending += self._tm_pack(*timing)
+            if len(pending) >= self._tm_limit:
+                self._streams[TIMING_CHANNEL].drain()
+        if pwm is not None and len(pwm):
+            if pwm.itemsize != RECORD_SIZE:
+                raise ValueError(f"records are {RECORD_SIZE} bytes, got {pwm.itemsize}")
+            stage.extend(pwm)
+        if len(stage) >= self._stage_bytes:
+            self._split_stage()
 
     # -- capture by a C producer (fc_sil's Core.bind_log) ---------------------
     # The producer appends raw 64-byte records straight to the queue of their kind's
@@ -367,38 +388,6 @@ class LogWriter:
         return any(KIND_CHANNELS.get(k) not in self._streams
                    for k in set(np.frombuffer(self._stage, RECORD_DTYPE)["kind"][-64:].tolist())
                    if k in KIND_CHANNELS)
-
-    def _cycle(self, records, pwm, status, timing, log_pwm=None) -> None:
-        if records.itemsize != RECORD_SIZE:
-            raise ValueError(f"records are {RECORD_SIZE} bytes, got {records.itemsize}")
-        stage = self._stage
-        stage.extend(records)       # the buffer itself: no intermediate bytes object
-        if status is not None and len(status):
-            if status.dtype is self._st_dtype:
-                pending = self._st_pending
-                pending.extend(status)
-                if len(pending) >= self._st_limit:
-                    self._streams[STATUS_CHANNEL].drain()
-            else:  # first status rows (opens and caches the channel), or a wrong dtype
-                self.write(STATUS_CHANNEL, status)
-                st = self._streams[STATUS_CHANNEL]
-                self._st_dtype, self._st_pending, self._st_limit = \
-                    st.in_dtype, st.pending, st.batch_bytes
-        if timing is not None:
-            if self._tm_pack is None:
-                tm = self._streams.get(TIMING_CHANNEL) or self._open(TIMING_CHANNEL, TIMING_DTYPE)
-                self._tm_pack, self._tm_pending, self._tm_limit = \
-                    tm.packer.pack, tm.pending, tm.batch_bytes
-            pending = self._tm_pending
-            pending += self._tm_pack(*timing)
-            if len(pending) >= self._tm_limit:
-                self._streams[TIMING_CHANNEL].drain()
-        if pwm is not None and (self._cycle_pwm if log_pwm is None else log_pwm) and len(pwm):
-            if pwm.itemsize != RECORD_SIZE:
-                raise ValueError(f"records are {RECORD_SIZE} bytes, got {pwm.itemsize}")
-            stage.extend(pwm)
-        if len(stage) >= self._stage_bytes:
-            self._split_stage()
 
     def _split_stage(self) -> None:
         staged = np.frombuffer(self._stage, dtype=RECORD_DTYPE)

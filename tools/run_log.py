@@ -17,16 +17,14 @@ TIMING_CHANNEL = "/timing"
 
 
 class RunLogSink:
-    """Loop hooks -> one LogWriter. Cost per FC cycle ~1 us (one write_cycle call);
-    measure the effect on a run by flying with and without --log."""
+    """Loop hooks -> one LogWriter. Over shared memory the FC's C poll appends the
+    records itself (capture_fc); measure the cost with `python -m silbridge.tools.log_bench`."""
 
     def __init__(self, path, *, metadata: dict, fc_logs_pwm: bool = False):
         self.writer = LogWriter(path, metadata=metadata)
         self.writer.declare(TIMING_CHANNEL, TIMING_DTYPE)
         # With the FC in its own process the bridge's PWM never reaches this
-        # writer: the FC then logs the PWM it published (fc_logs_pwm). The hook is
-        # the writer's own method, so a cycle costs one call.
-        self.fc_batch = self.writer.cycle_hook(fc_logs_pwm)
+        # writer: the FC then logs the PWM it published (fc_logs_pwm).
         # The bridge's hook: None when the FC logs the PWM (the bridge then skips it).
         self.pwm_records = None if fc_logs_pwm else self.writer.write_records
         self._fc_logs_pwm = fc_logs_pwm
@@ -50,8 +48,11 @@ class RunLogSink:
         self._unbind = lambda: core_c.bind_log(None)
         return writer.capture_flush if timing else writer.cycle_tick
 
-    # fc_batch(recs, pwm, status, timing): FC side, once per cycle; timing is the
-    # /timing row (sim_ns, imu_wall_ns, consume_wall_ns, pwm_wall_ns, loop_period_ns).
+    def fc_batch(self, recs, pwm, status, timing) -> None:
+        """FC side, once per cycle, when the FC loop does not capture in C (capture_fc);
+        timing is the /timing row (sim_ns, imu_wall_ns, consume_wall_ns, pwm_wall_ns,
+        loop_period_ns)."""
+        self.writer.write_cycle(recs, status, timing, pwm if self._fc_logs_pwm else None)
 
     # -- bridge side ----------------------------------------------------------
     # pwm_records(pwm): the PWM records the bridge received (bound in __init__; None

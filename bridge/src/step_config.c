@@ -2,7 +2,7 @@
  * step_config.c - the Kernel methods used between steps (stepmodule.c has the
  * step itself): the IMU noise block and injected gyro bias, the baro and
  * magnetometer configuration and noise, the disturbance forces, counters and
- * the attributes Python reads or sets (next_slow_ns, pos, phase).
+ * the attributes Python reads or sets (next_slow_ns, pos).
  */
 #include "step_kernel.h"
 
@@ -190,12 +190,6 @@ fail:
     return NULL;
 }
 
-PyObject *Kernel_due(Kernel *self, PyObject *Py_UNUSED(ignored))
-{
-    return Py_BuildValue("(LL)", (long long)(self->baro.on ? self->baro.next_ns : -1),
-                         (long long)(self->mag.on ? self->mag.next_ns : -1));
-}
-
 static PyObject *Kernel_get_next_slow(Kernel *self, void *closure)
 {
     (void)closure;
@@ -218,16 +212,8 @@ static PyObject *Kernel_get_pos(Kernel *self, void *closure)
     return PyLong_FromSsize_t(self->pos);
 }
 
-static PyObject *Kernel_get_phase(Kernel *self, void *closure)
-{
-    (void)closure;
-    return Py_BuildValue("[dddd]", self->phase[0], self->phase[1], self->phase[2],
-                         self->phase[3]);
-}
-
 PyGetSetDef sb_step_getset[] = {
     {"next_slow_ns", (getter)Kernel_get_next_slow, (setter)Kernel_set_next_slow,
      "sim time [ns] from which step flags F_SLOW_DUE", NULL},
     {"pos", (getter)Kernel_get_pos, NULL, "next row of the noise block", NULL},
-    {"phase", (getter)Kernel_get_phase, NULL, "rotor phases [rad]", NULL},
     {NULL, NULL, NULL, NULL, NULL}};

@@ -129,7 +129,6 @@ PyObject *Kernel_configure_mag(Kernel *self, PyObject *args);
 PyObject *Kernel_set_baro_block(Kernel *self, PyObject *arr);
 PyObject *Kernel_set_mag_block(Kernel *self, PyObject *arr);
 PyObject *Kernel_set_forces(Kernel *self, PyObject *plan);
-PyObject *Kernel_due(Kernel *self, PyObject *unused);
 extern PyGetSetDef sb_step_getset[];
 
 #endif /* SB_STEP_KERNEL_H */

@@ -483,7 +483,6 @@ static PyMethodDef Kernel_methods[] = {
      "set_baro_block((rows, 1) float64 standard normals)"},
     {"set_mag_block", (PyCFunction)Kernel_set_mag_block, METH_O,
      "set_mag_block((rows, 3) float64 standard normals)"},
-    {"due", (PyCFunction)Kernel_due, METH_NOARGS, "(baro next_ns, mag next_ns), -1 when off"},
     {"set_forces", (PyCFunction)Kernel_set_forces, METH_O,
      "set_forces([(setters, [(c_n, w_rad_s, t_on_s, phase_rad, periodic, axis)])]): the "
      "disturbance forces written before each run() (bridge/disturbances.py)"},

@@ -3,7 +3,8 @@
  *
  * Core.attach_io(segment_capsule, fc_sim_word, latency, period, e2e, words) binds
  * the segment (shm/include/sb_capi.h, the peer's side), FcLoop's three int64
- * statistics rings and an int64[FC_IO_WORDS] array of counters (core_object.h); Core.poll_io() then does what fc_sil/runtime.py FcLoop.poll
+ * statistics rings and an int64[FC_IO_WORDS] array of counters (core_object.h; the
+ * C poll carries on from their values, which FcLoop's Python poll keeps too); Core.poll_io() then does what fc_sil/runtime.py FcLoop.poll
  * does in Python, with the same clock readings in the same places: pop every
  * waiting sensor record into the bound record array (bind_batch), stamp the
  * consume time, run the core over them, push the PWM records, stamp the publish
@@ -94,7 +95,6 @@ PyObject *fc_ext_attach_io(CoreObject *self, PyObject *args)
         return NULL;
     }
     io->words = wv->buf;
-    memset(io->words, 0, 8 * FC_IO_WORDS);
     io->capsule = Py_NewRef(cap);
     io->api = api;
     io->fc_sim_word = word;

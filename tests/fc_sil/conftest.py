@@ -19,40 +19,29 @@ class Stream:
         self.k = 0
         self.seq = {}
 
-    def _next_seq(self, kind):
-        s = self.seq.get(kind, 0)
-        self.seq[kind] = s + 1
-        return s
+    def _record(self, kind, sim_ns, **fields):
+        """One record of `kind` at sim_ns with the next sequence number, as RECORD_DTYPE."""
+        seq = self.seq.get(kind, 0)
+        self.seq[kind] = seq + 1
+        r = R.empty(kind, 1)
+        r["sim_ns"] = sim_ns
+        r["seq"] = seq
+        for name, value in fields.items():
+            r[name] = value
+        return R.as_generic(r)
 
     def batch(self, n_imu, accel=(0.0, 0.0, -G), gyro=(0.0, 0.0, 0.0), pressure_pa=101325.0,
               field=(0.2, 0.0, 0.4), q_gt=(1.0, 0.0, 0.0, 0.0)):
         rows = []
         for _ in range(n_imu):
             t = self.k * self.imu_period_ns
-            imu = R.empty(R.Kind.IMU, 1)
-            imu["sim_ns"] = t
-            imu["seq"] = self._next_seq(R.Kind.IMU)
-            imu["accel_frd_m_s2"] = accel
-            imu["gyro_frd_rad_s"] = gyro
-            rows.append(R.as_generic(imu))
+            rows.append(self._record(R.Kind.IMU, t, accel_frd_m_s2=accel, gyro_frd_rad_s=gyro))
             if self.baro_every and self.k % self.baro_every == 0:
-                b = R.empty(R.Kind.BARO, 1)
-                b["sim_ns"] = t
-                b["seq"] = self._next_seq(R.Kind.BARO)
-                b["pressure_pa"] = pressure_pa
-                rows.append(R.as_generic(b))
+                rows.append(self._record(R.Kind.BARO, t, pressure_pa=pressure_pa))
             if self.mag_every and self.k % self.mag_every == 0:
-                m = R.empty(R.Kind.MAG, 1)
-                m["sim_ns"] = t
-                m["seq"] = self._next_seq(R.Kind.MAG)
-                m["field_frd_gauss"] = field
-                rows.append(R.as_generic(m))
+                rows.append(self._record(R.Kind.MAG, t, field_frd_gauss=field))
             if self.gt and self.k % 10 == 0:
-                g = R.empty(R.Kind.GT_ATT, 1)
-                g["sim_ns"] = t
-                g["seq"] = self._next_seq(R.Kind.GT_ATT)
-                g["q_wxyz"] = q_gt
-                rows.append(R.as_generic(g))
+                rows.append(self._record(R.Kind.GT_ATT, t, q_wxyz=q_gt))
             self.k += 1
         return np.concatenate(rows)
 

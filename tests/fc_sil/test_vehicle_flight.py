@@ -29,6 +29,11 @@ def _once(state: dict, key: str, cond: bool) -> bool:
     return False
 
 
+def _guided_takeoff(v, alt_m: float) -> tuple:
+    """GUIDED, arm, take off to alt_m: the three replies."""
+    return (v.set_mode(CopterMode.GUIDED), v.arm(False), v.takeoff(alt_m))
+
+
 def _mission(v, legs_ne, alt_m=10.0, rtl=True):
     o = v.est.origin
     items = [MissionItem(0, mav.MAV_FRAME_GLOBAL, mav.MAV_CMD_NAV_WAYPOINT, x=v.home_lat_e7,
@@ -51,9 +56,7 @@ def test_guided_takeoff_hold_reposition_land_disarm():
     def script(f):
         v, t = f.v, f.t_s
         if _once(st, "up", t > 3):
-            replies.append(v.set_mode(CopterMode.GUIDED))
-            replies.append(v.arm(False))
-            replies.append(v.takeoff(10.0))
+            replies.extend(_guided_takeoff(v, 10.0))
         if 14 < t < 18:
             hold.append((f.truth_agl_m(), f.truth_tilt_deg()))
         if _once(st, "go", t > 18):
@@ -136,9 +139,7 @@ def test_rtl_from_away_climbs_to_rtl_alt_and_lands_home():
     def script(f):
         v, t = f.v, f.t_s
         if _once(st, "up", t > 3):
-            v.set_mode(CopterMode.GUIDED)
-            v.arm(False)
-            v.takeoff(6.0)
+            _guided_takeoff(v, 6.0)
         if _once(st, "go", t > 12):
             lat, lon = v.est.origin.to_latlon_e7(v.home_ne[0] - 25.0, v.home_ne[1])
             v.reposition(lat, lon, 6.0, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT, float("nan"),
@@ -192,9 +193,7 @@ def test_guided_velocity_target_stops_after_guid_timeout():
     def script(f):
         v, t = f.v, f.t_s
         if _once(st, "up", t > 3):
-            v.set_mode(CopterMode.GUIDED)
-            v.arm(False)
-            v.takeoff(8.0)
+            _guided_takeoff(v, 8.0)
         if 12 < t < 16:
             v.set_position_target(vel_target(3.0))   # streamed, as offboard scripts do
         if _once(st, "a", t > 15.5):
@@ -213,9 +212,7 @@ def test_loiter_sticks_move_then_brake_stops_and_holds():
     def script(f):
         v, t = f.v, f.t_s
         if _once(st, "up", t > 3):
-            v.set_mode(CopterMode.GUIDED)
-            v.arm(False)
-            v.takeoff(8.0)
+            _guided_takeoff(v, 8.0)
         if _once(st, "loiter", t > 12):
             st["r_loiter"] = v.set_mode(CopterMode.LOITER)
             st["ne0"] = f.truth_ne_m()
