@@ -16,6 +16,7 @@ Bounded in time; nothing spins.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import select
@@ -87,13 +88,17 @@ def bench_encode(seconds: float) -> float:
     return n / (time.perf_counter() - t0)
 
 
-def bench_command_rtt(seconds: float) -> dict:
-    server = GcsServer(_AcceptingVehicle(), _Params(), ["udpin:127.0.0.1:0"])
+@contextlib.contextmanager
+def _served(server: GcsServer, tick=None):
+    """The server started, a vehicle thread servicing it at 100 Hz (calling tick() too),
+    and a UDP client socket: yields (server address, socket); stops everything after."""
     stop = threading.Event()
 
     def vehicle_loop():
         while not stop.is_set():
             server.service()
+            if tick is not None:
+                tick()
             stop.wait(0.01)
 
     vt = threading.Thread(target=vehicle_loop, daemon=True)
@@ -102,10 +107,21 @@ def bench_command_rtt(seconds: float) -> dict:
     addr = next(iter(server.local_addresses().values()))
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind(("127.0.0.1", 0))
+    try:
+        yield addr, sock
+    finally:
+        stop.set()
+        server.stop()
+        vt.join()
+        sock.close()
+
+
+def bench_command_rtt(seconds: float) -> dict:
+    server = GcsServer(_AcceptingVehicle(), _Params(), ["udpin:127.0.0.1:0"])
     codec = mav.MAVLink(None, 255, 190)
     parser = mav.MAVLink(None)
     rtts = []
-    try:
+    with _served(server) as (addr, sock):
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             msg = mav.MAVLink_command_long_message(1, 1, mav.MAV_CMD_NAV_LAND, 0,
@@ -121,11 +137,6 @@ def bench_command_rtt(seconds: float) -> dict:
                             got = True
             if got:
                 rtts.append((time.perf_counter() - t0) * 1e3)
-    finally:
-        stop.set()
-        server.stop()
-        vt.join()
-        sock.close()
     rtts.sort()
     return {"n": len(rtts), "p50_ms": statistics.median(rtts) if rtts else None,
             "p99_ms": rtts[int(0.99 * (len(rtts) - 1))] if rtts else None}
@@ -153,25 +164,11 @@ def _thread_cpu_s(native_id: int) -> float:
 
 def bench_server_cpu(seconds: float) -> dict:
     server = GcsServer(_AcceptingVehicle(), _Params(), ["udpin:127.0.0.1:0"])
-    stop = threading.Event()
     snap = VehicleSnapshot(home_set=True, servo_us=(1500,) * 4,
                            pid_rows=tuple(PidTuningRow(a, 1, 1, 0, 0, 0, 0) for a in (1, 2, 3, 4)))
-
-    def vehicle_loop():
-        while not stop.is_set():
-            server.service()
-            server.publish(snap)
-            stop.wait(0.01)
-
-    vt = threading.Thread(target=vehicle_loop, daemon=True)
-    vt.start()
-    server.start()
-    addr = next(iter(server.local_addresses().values()))
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind(("127.0.0.1", 0))
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
     codec = mav.MAVLink(None, 255, 190)
-    try:
+    with _served(server, tick=lambda: server.publish(snap)) as (addr, sock):
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
         for msg_id, interval_us in TYPICAL_STREAMS:
             sock.sendto(mav.MAVLink_command_long_message(
                 1, 1, mav.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msg_id, interval_us, 0, 0, 0, 0,
@@ -186,11 +183,6 @@ def bench_server_cpu(seconds: float) -> dict:
                 sock.recv(65535)
                 n += 1
         cpu1, t1 = _thread_cpu_s(tid), time.monotonic()
-    finally:
-        stop.set()
-        server.stop()
-        vt.join()
-        sock.close()
     return {"msgs_per_s": n / (t1 - t0), "cpu_pct": 100.0 * (cpu1 - cpu0) / (t1 - t0)}
 
 
