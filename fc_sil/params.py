@@ -38,7 +38,7 @@ FEATURES = {
     "gyro_bias": "SB_BIAS_EN",        # online gyro-bias estimation (Listing 3)
     "shaping": "SB_SHAPE_EN",         # attitude input shaping + rate feed-forward (ArduCopter)
 }
-# The paper's ablation list (DESIGN.md "Ablation"): each switched off alone, then all.
+# The paper's ablation list (paper 2.1): each switched off alone, then all.
 ABLATION_FEATURES = ("d_filter", "d_clamp", "trim_ramp", "trust_ema", "blend",
                      "yaw_antiwindup", "slew")
 

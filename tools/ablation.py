@@ -1,19 +1,15 @@
-"""The stabilisation features of the paper and the FC switch behind each.
+"""The ablation study's variants, read from the one feature declaration.
 
-Ablation (paper 2.1, DESIGN "Ablation"): each feature switched off alone, and
-all off, on the same seeds as the full controller.
+The stabilisation features and the FC switch behind each are declared once, in
+``fc_sil/params.py`` (``FEATURES``: name -> enable parameter; ``ABLATION_FEATURES``:
+the paper's ablation list). The CLI's ``--feature-off`` choices, this module's
+variants, ``FlightCore.set_feature`` and docs/params.md all take those names.
+
+Ablation (paper 2.1): each feature switched off alone, and all off, on the same
+seeds as the full controller.
 """
 
-# feature name -> the FC parameter that enables it (1 = on)
-FEATURES = {
-    "dfilter": "SB_DFILT_EN",       # D-term PT2x2 filter (off: ArduCopter's PT1)
-    "dclamp": "SB_DCLAMP_EN",       # D output clamp +-12 us
-    "trim_ramp": "SB_TRIM_RAMP_EN",  # hover-trim 0.8 s ramp-in (off: applied as a step)
-    "trust_ema": "SB_TRUST_EMA_EN",  # accel-trust EMA in the Mahony filter
-    "blend": "SB_BLEND_EN",         # continuous EST/GT blending (off: discrete switch)
-    "yaw_aw": "SB_YAW_AW_EN",       # yaw rate-PI anti-windup
-    "slew": "SB_SLEW_EN",           # per-motor slew-rate limit
-}
+from silbridge.fc_sil.params import ABLATION_FEATURES, FEATURES
 
 
 class UnknownFeature(ValueError):
@@ -31,8 +27,8 @@ def feature_params(features_off) -> dict:
 
 
 def variants() -> list[tuple[str, tuple]]:
-    """(label, features off) for the full controller, each feature alone, all off."""
+    """(label, features off) for the full controller, each ablated feature alone, all off."""
     out = [("full", ())]
-    out += [(f"no_{f}", (f,)) for f in FEATURES]
-    out.append(("all_off", tuple(FEATURES)))
+    out += [(f"no_{f}", (f,)) for f in ABLATION_FEATURES]
+    out.append(("all_off", tuple(ABLATION_FEATURES)))
     return out

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from silbridge.fc_sil.params import FEATURES
+
 from .flight import FlightOptions
 
 
@@ -56,7 +58,9 @@ def add_fc_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="set an FC parameter (repeatable), e.g. ATC_RAT_RLL_D=0.004")
     p.add_argument("--feature-off", action="append", default=[], metavar="FEATURE",
-                   help="switch a stabilisation feature off (ablation), repeatable")
+                   choices=list(FEATURES),
+                   help="switch a stabilisation feature off (ablation), repeatable: "
+                        + ", ".join(FEATURES))
 
 
 def add_mavlink_arguments(p: argparse.ArgumentParser) -> None:

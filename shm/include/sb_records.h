@@ -12,7 +12,7 @@
  * no implicit padding: every field sits at its natural alignment and the
  * static_asserts below pin the layout.
  *
- * Frames: body FRD, world NED (see DESIGN.md "Contracts").
+ * Frames: body FRD, world NED (README "Layout" and docs/hil_transport.md).
  * Time:   sim_ns  = simulation time since run start, int64 ns.
  *         wall_ns = CLOCK_MONOTONIC at publish, int64 ns.
  */

@@ -8,7 +8,8 @@ import sys
 
 import pytest
 
-from silbridge.tools.ablation import FEATURES, feature_params, variants
+from silbridge.fc_sil.params import ABLATION_FEATURES, FEATURES
+from silbridge.tools.ablation import feature_params, variants
 from silbridge.tools.campaign import make_specs, run_campaign
 from silbridge.tools.table1 import aggregate, markdown
 
@@ -52,8 +53,9 @@ def test_ray_executor_matches_local(tmp_path):
 def test_ablation_variants_switch_real_parameters():
     labels = [v[0] for v in variants()]
     assert labels[0] == "full" and labels[-1] == "all_off"
-    assert len(labels) == len(FEATURES) + 2
+    assert labels[1:-1] == [f"no_{f}" for f in ABLATION_FEATURES]
     assert feature_params(["slew"]) == {"SB_SLEW_EN": 0}
+    assert feature_params(["d_filter"]) == {"SB_DFILT_EN": 0}   # the documented names
     with pytest.raises(ValueError, match="unknown feature"):
         feature_params(["warp_drive"])
     from silbridge.fc_sil.core import FlightCore
