@@ -191,10 +191,15 @@ class RatePID:
 
     COLUMNS = ("p_us", "i_us", "d_us", "ff_us", "out_us", "limited", "d_clamped")
 
-    def __init__(self, loop_hz: float, kp: float = 0.135, ki: float = 0.135, kd: float = 0.0036,
-                 kff: float = 0.0, imax: float = 0.5, fltt_hz: float = 0.0, flte_hz: float = 0.0,
-                 fltd_hz: float = 20.0, out_us_per_unit: float = 500.0,
-                 d_clamp_us: float = 12.0, d_clamp: bool = True, d_pt2x2: bool = True,
+    def __init__(self, loop_hz: float, kp: float = _default("ATC_RAT_RLL_P"),
+                 ki: float = _default("ATC_RAT_RLL_I"), kd: float = _default("ATC_RAT_RLL_D"),
+                 kff: float = _default("ATC_RAT_RLL_FF"), imax: float = _default("ATC_RAT_RLL_IMAX"),
+                 fltt_hz: float = _default("ATC_RAT_RLL_FLTT"),
+                 flte_hz: float = _default("ATC_RAT_RLL_FLTE"),
+                 fltd_hz: float = _default("ATC_RAT_RLL_FLTD"), out_us_per_unit: float = 500.0,
+                 d_clamp_us: float = _default("SB_DCLAMP_US"),
+                 d_clamp: bool = bool(_default("SB_DCLAMP_EN")),
+                 d_pt2x2: bool = bool(_default("SB_DFILT_EN")),
                  antiwindup: bool = True):
         self._s = _state("rate_pid")
         self.dt_s = 1.0 / loop_hz
@@ -213,9 +218,12 @@ class RatePID:
 class HoverTrim:
     """Hover-trim learning and ramp-in (fc_trim)."""
 
-    def __init__(self, window_s: float = 3.0, gain_us_per_rad: float = 80.0,
-                 max_us: float = 50.0, ramp_s: float = 0.8, enable: bool = True,
-                 ramp: bool = True):
+    def __init__(self, window_s: float = _default("SB_TRIM_WIN_S"),
+                 gain_us_per_rad: float = _default("SB_TRIM_GAIN"),
+                 max_us: float = _default("SB_TRIM_MAX_US"),
+                 ramp_s: float = _default("SB_TRIM_RAMP_S"),
+                 enable: bool = bool(_default("SB_TRIM_EN")),
+                 ramp: bool = bool(_default("SB_TRIM_RAMP_EN"))):
         self._s = _state("trim")
         _core.trim_reset(self._s)
         self.cfg = (enable, ramp, window_s, gain_us_per_rad, max_us, ramp_s)
@@ -229,7 +237,8 @@ class HoverTrim:
 class Blend:
     """EST/GT blend weight (fc_blend)."""
 
-    def __init__(self, tau_s: float = 0.25, continuous: bool = True, w0: float = 0.0):
+    def __init__(self, tau_s: float = _default("SB_BLEND_TC"),
+                 continuous: bool = bool(_default("SB_BLEND_EN")), w0: float = 0.0):
         self._s = _state("blend")
         self.tau_s = tau_s
         self.continuous = continuous
@@ -244,10 +253,14 @@ class Mixer:
 
     SPOOL_SHUT_DOWN, SPOOL_GROUND_IDLE, SPOOL_FLIGHT = 0, 1, 2
 
-    def __init__(self, pwm_min_us: float = 1000, pwm_max_us: float = 2000,
-                 spin_min: float = 0.15, spin_max: float = 0.95,
-                 yaw_headroom_us: float = 200, slew_up_time_s: float = 0.0,
-                 slew_dn_time_s: float = 0.0, slew: bool = True):
+    def __init__(self, pwm_min_us: float = _default("MOT_PWM_MIN"),
+                 pwm_max_us: float = _default("MOT_PWM_MAX"),
+                 spin_min: float = _default("MOT_SPIN_MIN"),
+                 spin_max: float = _default("MOT_SPIN_MAX"),
+                 yaw_headroom_us: float = _default("MOT_YAW_HEADROOM"),
+                 slew_up_time_s: float = _default("MOT_SLEW_UP_TIME"),
+                 slew_dn_time_s: float = _default("MOT_SLEW_DN_TIME"),
+                 slew: bool = bool(_default("SB_SLEW_EN"))):
         self._s = _state("mixer")
         self.cfg = (pwm_min_us, pwm_max_us, spin_min, spin_max, yaw_headroom_us,
                     slew_up_time_s, slew_dn_time_s, slew)

@@ -13,31 +13,31 @@ def test_arducopter_quad_x_order_and_directions():
     np.testing.assert_array_equal(f[:, 0], [-1, 1, 1, -1])   # roll right: left side up
     np.testing.assert_array_equal(f[:, 1], [1, -1, 1, -1])   # pitch up: front up
     np.testing.assert_array_equal(f[:, 2], [1, 1, -1, -1])   # yaw right: CCW motors up
-    motor, pwm, flags, _ = B.Mixer().run(1500, 20, 0, 0)
+    motor, pwm, flags, _ = B.Mixer(slew=False).run(1500, 20, 0, 0)
     np.testing.assert_array_equal(pwm[0], [1480, 1520, 1520, 1480])
     assert flags[0] == 0
 
 
 def test_roll_pitch_saturation_scales_both_and_flags_them():
-    motor, pwm, flags, applied = B.Mixer().run(1500, 500, 300, 0)
+    motor, pwm, flags, applied = B.Mixer(slew=False).run(1500, 500, 300, 0)
     assert flags[0] & SAT_ROLL and flags[0] & SAT_PITCH
     assert motor.min() >= 1150 - 1e-3 and motor.max() <= 1950 + 1e-3   # MOT_SPIN_MIN..MAX band
     assert applied[0, 1] / applied[0, 2] == pytest.approx(500 / 300)     # ratio kept
 
 
 def test_throttle_gives_way_and_flags_its_limits():
-    _, _, flags, applied = B.Mixer().run(1940, 100, 0, 0)
+    _, _, flags, applied = B.Mixer(slew=False).run(1940, 100, 0, 0)
     assert flags[0] & SAT_THR_HIGH and not flags[0] & SAT_ROLL
     assert applied[0, 0] == pytest.approx(1850)
-    _, _, flags, _ = B.Mixer().run(1100, 0, 0, 0)
+    _, _, flags, _ = B.Mixer(slew=False).run(1100, 0, 0, 0)
     assert flags[0] & SAT_THR_LOW
 
 
 def test_yaw_keeps_its_headroom_and_is_flagged_beyond_it():
-    _, _, flags, applied = B.Mixer(yaw_headroom_us=200).run(1550, 380, 0, 500)
+    _, _, flags, applied = B.Mixer(yaw_headroom_us=200, slew=False).run(1550, 380, 0, 500)
     assert flags[0] & SAT_YAW
     assert applied[0, 3] == pytest.approx(200)     # the room left is smaller: headroom wins
-    _, _, flags, applied = B.Mixer().run(1500, 0, 0, 150)
+    _, _, flags, applied = B.Mixer(slew=False).run(1500, 0, 0, 150)
     assert not flags[0] & SAT_YAW and applied[0, 3] == pytest.approx(150)
 
 
@@ -49,7 +49,7 @@ def test_outputs_stay_in_range_and_finite_for_any_input():
     cols[0][::7] = np.nan
     cols[1][::11] = np.inf
     thr[::13] = -np.inf
-    motor, pwm, flags, _ = B.Mixer().run(thr, *cols)
+    motor, pwm, flags, _ = B.Mixer(slew=False).run(thr, *cols)
     assert np.isfinite(motor).all()
     assert pwm.min() >= 1000 and pwm.max() <= 2000
 
@@ -68,7 +68,7 @@ def test_slew_limit_per_motor():
 
 
 def test_spool_states():
-    m = B.Mixer()
+    m = B.Mixer(slew=False)
     _, pwm, flags, _ = m.run(1500, 100, 100, 100, spool=B.Mixer.SPOOL_SHUT_DOWN)
     assert np.all(pwm == 1000) and flags[0] == 0
     _, pwm, _, _ = m.run(1100, 100, 100, 100, spool=B.Mixer.SPOOL_GROUND_IDLE)

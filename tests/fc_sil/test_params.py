@@ -164,3 +164,19 @@ def test_param_doc_is_up_to_date():
     proc = subprocess.run([sys.executable, "-m", "silbridge.tools.gen_param_doc", "--check"],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
+
+
+def test_block_defaults_are_the_declared_defaults():
+    """fc_sil/blocks.py takes its defaults from the declaration, never its own numbers."""
+    import inspect
+
+    from silbridge.fc_sil import blocks as B
+    d = {p.name: p.default for p in P.PARAMS}
+    pid = inspect.signature(B.RatePID).parameters
+    assert pid["fltt_hz"].default == d["ATC_RAT_RLL_FLTT"]
+    assert pid["fltd_hz"].default == d["ATC_RAT_RLL_FLTD"]
+    assert pid["kd"].default == d["ATC_RAT_RLL_D"]
+    mix = inspect.signature(B.Mixer).parameters
+    assert mix["slew_up_time_s"].default == d["MOT_SLEW_UP_TIME"]
+    assert mix["slew_dn_time_s"].default == d["MOT_SLEW_DN_TIME"]
+    assert inspect.signature(B.HoverTrim).parameters["ramp_s"].default == d["SB_TRIM_RAMP_S"]
