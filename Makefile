@@ -23,8 +23,10 @@ $(PY):
 sysdeps:
 	@./tools/install_sysdeps.sh
 
+# setuptools always adds an informational "Editable installation." warning to an editable
+# install; it says nothing about this project, so it is filtered out by its exact text.
 setup: $(PY) sysdeps
-	$(PIP) install -q -e ".[test]"
+	PYTHONWARNINGS="ignore:Editable installation" $(PIP) install -q -e ".[test]"
 
 test: setup
 	$(PY) -m pytest -q tests
