@@ -1,0 +1,83 @@
+"""The house's boundaries, held by a test (README "Layout").
+
+The two programs meet only through `shm/` and `mavlink/`, so `bridge/` and `fc_sil/` never
+import each other; `shm/` imports no other part of the project; `mavlink/` knows records and
+messages, not physics or controllers; nothing below the command line imports `tools/` (the
+benchmark toolkit and the command line); and the portable C core includes only its own headers
+and the C standard library, so it compiles on a flight controller as it is.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PARTS = ("bridge", "fc_sil", "shm", "mavlink", "tools", "jsbsim_models")
+
+# part -> the project parts it must never import
+FORBIDDEN = {
+    "bridge": {"fc_sil", "tools"},
+    "fc_sil": {"bridge", "tools"},
+    "shm": {"bridge", "fc_sil", "mavlink", "tools"},
+    "mavlink": {"bridge", "fc_sil", "tools"},
+}
+
+C_STANDARD_HEADERS = {
+    "assert.h", "complex.h", "ctype.h", "errno.h", "fenv.h", "float.h", "inttypes.h",
+    "iso646.h", "limits.h", "math.h", "stdalign.h", "stdarg.h", "stdatomic.h", "stdbool.h",
+    "stddef.h", "stdint.h", "stdnoreturn.h", "string.h", "tgmath.h",
+}
+
+
+def _imported_parts(path: Path, part: str) -> set[str]:
+    """Project parts a Python file imports (absolute `silbridge.X` or relative `..X`)."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    found = set()
+    for node in ast.walk(tree):
+        names = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level >= 2 and node.module:          # from ..other import x
+                names = [f"silbridge.{node.module}"]
+            elif node.level == 0 and node.module:
+                names = [node.module]
+        for name in names:
+            bits = name.split(".")
+            if len(bits) >= 2 and bits[0] == "silbridge" and bits[1] in PARTS:
+                found.add(bits[1])
+    return found - {part}
+
+
+@pytest.mark.parametrize("part", sorted(FORBIDDEN))
+def test_python_parts_keep_their_boundaries(part):
+    bad = []
+    for path in sorted((ROOT / part).rglob("*.py")):
+        wrong = _imported_parts(path, part) & FORBIDDEN[part]
+        if wrong:
+            bad.append(f"{path.relative_to(ROOT)} imports {', '.join(sorted(wrong))}")
+    assert not bad, "boundary crossed:\n" + "\n".join(bad)
+
+
+def test_c_core_includes_only_its_own_headers_and_the_standard_library():
+    core = ROOT / "fc_sil" / "core"
+    own = {p.name for p in core.iterdir()}
+    bad = []
+    for path in sorted(core.glob("*.[ch]")):
+        for m in re.finditer(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', path.read_text(), re.M):
+            kind, header = m.groups()
+            ok = header in own if kind == '"' else header in C_STANDARD_HEADERS
+            if not ok:
+                bad.append(f"{path.name}: #include {kind}{header}")
+    assert not bad, "the portable core reaches outside itself:\n" + "\n".join(bad)
+
+
+def test_the_checker_sees_a_crossing(tmp_path):
+    """The import scan is not vacuous: it finds both import forms."""
+    f = tmp_path / "x.py"
+    f.write_text("from silbridge.fc_sil.params import PARAMS\nfrom ..tools import cli\n")
+    assert _imported_parts(f, "bridge") == {"fc_sil", "tools"}
