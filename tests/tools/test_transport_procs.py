@@ -61,10 +61,10 @@ def test_an_fc_child_dying_mid_step_ends_the_step_with_its_status():
         t0 = time.monotonic()
         try:
             with pytest.raises(ChildLost, match=r"exited with status -9 while running step 1"):
-                tb.run_step("shm", 1000, 3.0, fc, 1)
+                tb.run_step("shm", 1000, 30.0, fc, 1)
         finally:
             killer.cancel()
-        assert time.monotonic() - t0 < 3.0     # not the step's full length
+        assert time.monotonic() - t0 < 20.0    # ended by the death, not the step's 30 s
 
 
 def test_a_silent_child_times_out_and_is_stopped():
