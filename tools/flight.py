@@ -13,6 +13,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 from dataclasses import dataclass
 
 from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
@@ -226,7 +227,8 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
         if opts.log_path or opts.live is not None:
             # The FC process writes the log (it sees every record and its own PWM);
             # it adds the parameter set to the metadata the bridge side knows.
-            meta_path = f"{opts.log_path or name}.meta.json"
+            meta_path = f"{opts.log_path}.meta.json" if opts.log_path else \
+                os.path.join(tempfile.gettempdir(), f"{name}.meta.json")
             meta = run_metadata(opts, sc, sim, cfg, None)
             with open(meta_path, "w") as fh:
                 json.dump(meta, fh)
