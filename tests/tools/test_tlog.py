@@ -56,7 +56,7 @@ def test_fly_tlog_holds_both_directions(tmp_path):
     assert tlog.stat().st_size > 0, err[-3000:]
 
     msgs = _read_tlog(tlog)
-    assert len(msgs) > 20
+    assert len(msgs) >= 10
     stamps = [m._timestamp for m in msgs]
     assert stamps == sorted(stamps), "tlog stamps go back in time"
     assert t_start - 1 <= stamps[0] and stamps[-1] <= t_end + 1, "not wall-clock stamps"
