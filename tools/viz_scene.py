@@ -12,9 +12,11 @@ bytes are the SDK's own protobuf encoding) for Foxglove's 3D panel:
   scenario's [[disturbance]] type "force", bridge/disturbances.py), in world
   for NED forces and base_link for FRD ones, 0.1 m per m/s^2 of acceleration
   it imposes (1 g: ~1 m).
-The vehicle entities never change, so they are encoded once; a message
-prepends its timestamp (a protobuf message concatenated with another is
-their merge) and adds the arrows of that instant.
+The vehicle entities never change, so they are encoded once, and so are the
+force entities without arrows; a message prepends its timestamp to each (a
+protobuf message concatenated with another is their merge, and the stamp is
+three varints written here) and builds with the SDK only the arrows that are
+on at that instant.
 """
 
 from __future__ import annotations
@@ -69,6 +71,15 @@ def _length_delimited(field: int, data: bytes) -> bytes:
     return pb_tag(field, 2) + varint(len(data)) + data
 
 
+def _stamp(ns: int) -> bytes:
+    """A SceneEntity holding only its timestamp (field 1, google.protobuf.Timestamp:
+    seconds 1, nanos 2; zeros left out as proto3 encoders do)."""
+    sec, nsec = divmod(ns, 1_000_000_000)
+    ts = (pb_tag(1, 0) + varint(sec) if sec else b"") + (pb_tag(2, 0) + varint(nsec)
+                                                          if nsec else b"")
+    return _length_delimited(1, ts)
+
+
 class Scene:
     """SceneUpdate messages at chosen sample times (see the module docstring)."""
 
@@ -81,6 +92,9 @@ class Scene:
         self._command = _quad_entity(fg, "command", "base_link_cmd", 0.35, (0.1, 0.8, 0.2),
                                      (0.1, 0.8, 0.2), (0.1, 0.8, 0.2)).encode()
         self._forces = _force_scripts(metadata)
+        self._no_arrows = {frame: fg.SceneEntity(frame_id=frame, id=f"disturbance_{frame}",
+                                                 frame_locked=True).encode()
+                           for frame in ("world", "base_link")}
 
     def messages(self, sim_ns: np.ndarray, pos_ned: np.ndarray) -> list[bytes]:
         """One SceneUpdate per sample: the vehicle's position pos_ned (n, 3) places the
@@ -92,9 +106,7 @@ class Scene:
         pos_enu = ned_to_enu(pos_ned)
         out = []
         for i, ns in enumerate(sim_ns.tolist()):
-            ns = max(ns, 0)
-            stamp = fg.SceneEntity(timestamp=fg.Timestamp(sec=ns // 1_000_000_000,
-                                                          nsec=ns % 1_000_000_000)).encode()
+            stamp = _stamp(max(ns, 0))
             prims = []
             for frame, (vec, quat, length) in arrows.items():
                 origin = pos_enu[i] if frame == "world" else (0.0, 0.0, 0.0)
@@ -110,9 +122,10 @@ class Scene:
                         color=fg.Color(r=1.0, g=0.55, b=0.0, a=1.0))))
             entities = [stamp + self._vehicle, stamp + self._command]
             for frame in ("world", "base_link"):
-                entities.append(stamp + fg.SceneEntity(
+                mine = [p for f, p in prims if f == frame]
+                entities.append(stamp + (fg.SceneEntity(
                     frame_id=frame, id=f"disturbance_{frame}", frame_locked=True,
-                    arrows=[p for f, p in prims if f == frame]).encode())
+                    arrows=mine).encode() if mine else self._no_arrows[frame]))
             out.append(b"".join(_length_delimited(2, e) for e in entities))
         return out
 
