@@ -34,7 +34,8 @@ def decoded(path, topics=None) -> dict[str, list]:
     """topic -> [(log_time, decoded message)] of the file, in file order."""
     out: dict[str, list] = {}
     with open(path, "rb") as f:
-        reader = make_reader(f, decoder_factories=[Ros2Decoders(), ProtobufDecoders()])
+        reader = make_reader(f, decoder_factories=[Ros2Decoders(), ProtobufDecoders()],
+                             validate_crcs=True)
         for _schema, ch, msg, dec in reader.iter_decoded_messages(topics=topics):
             out.setdefault(ch.topic, []).append((msg.log_time, dec))
     return out
@@ -109,6 +110,14 @@ def test_every_viewable_channel_is_in_a_flight_log(flight):
         assert {"vehicle", "command", "disturbance_world", "disturbance_base_link"} <= set(ents)
         on = 10.5e9 <= t < 11.5e9
         assert len(ents["disturbance_world"].arrows) == (1 if on else 0), t
+    # The summary's statistics count them (chunks included).
+    with open(_path, "rb") as f:
+        stats = make_reader(f).get_summary()
+    counts = stats.statistics.channel_message_counts
+    for cid, ch in stats.channels.items():
+        if ch.topic in viz:
+            assert counts[cid] == len(viz[ch.topic]), ch.topic
+    assert stats.statistics.chunk_count > 0
     # The analysis reads the same log whole and sound.
     assert log.read_error is None
     assert check_log(log) == []
