@@ -129,7 +129,9 @@ def _scan(f, size: int, wanted: list[str] | None):
     cut = damage = None
     keep = (lambda topic: True) if wanted is None else \
         (lambda topic: topic in wanted or topic == EVENTS_CHANNEL)
-    reader = StreamReader(f, validate_crcs=True, record_size_limit=None, emit_chunks=True)
+    # No running CRC over the whole data section: our writer leaves its CRC 0 (every batch
+    # carries its own CRC-32), and compressed chunks are checked when broken up below.
+    reader = StreamReader(f, validate_crcs=False, record_size_limit=None, emit_chunks=True)
 
     def take(rec) -> None:
         if isinstance(rec, Message):

@@ -44,7 +44,6 @@ at most `batch_rows` rows per channel and the records staged by
 from __future__ import annotations
 
 import json
-import struct
 from pathlib import Path
 
 import numpy as np
@@ -55,7 +54,8 @@ from silbridge.tools.log_format import (CHANNEL_DTYPE_KEY, EVENTS_CHANNEL, KIND_
                                         STATUS_CHANNEL, TIMING_CHANNEL, TIMING_DTYPE,
                                         LogError, to_json)
 from silbridge.tools.log_reader import RunLog, read_log
-from silbridge.tools.log_schema import BatchCodec, dtype_to_json, ros2msg_schema, row_layout
+from silbridge.tools.log_schema import (BatchCodec, dtype_to_json, ros2msg_schema, row_layout,
+                                        row_struct)
 from silbridge.tools.mcap_writer import LibraryMcap, McapFile, NullMcap
 from silbridge.tools.viz_log import VIZ_HZ_DEFAULT
 
@@ -79,25 +79,6 @@ _EVENT_SCHEMA = {
         "fields": {"type": "object"},
     },
 }
-
-
-_STRUCT_CODES = {("b", 1): "?", ("i", 1): "b", ("u", 1): "B", ("i", 2): "h", ("u", 2): "H",
-                 ("i", 4): "i", ("u", 4): "I", ("i", 8): "q", ("u", 8): "Q",
-                 ("f", 4): "f", ("f", 8): "d"}
-
-
-def _row_struct(dtype: np.dtype) -> struct.Struct | None:
-    """A struct packing one row of `dtype` from its flattened field values (None if it can't)."""
-    fmt, pos = "<", 0
-    for name, (sub, offset, *_) in sorted(dtype.fields.items(), key=lambda kv: kv[1][1]):
-        code = _STRUCT_CODES.get((sub.base.kind, sub.base.itemsize))
-        if code is None or offset < pos or sub.base.byteorder == ">":
-            return None
-        fmt += "x" * (offset - pos) + code * max(1, int(np.prod(sub.shape)))
-        pos = offset + sub.itemsize
-    fmt += "x" * (dtype.itemsize - pos)
-    packer = struct.Struct(fmt)
-    return packer if packer.size == dtype.itemsize else None
 
 
 class _Stream:
@@ -133,7 +114,7 @@ class _Stream:
         self.batch_bytes = capacity * in_dtype.itemsize
         self.rows = 0
         self.last_sim_ns = 0
-        self.packer = _row_struct(in_dtype)
+        self.packer = row_struct(in_dtype)
         self._mcap = mcap
         self.tap = None     # tap(rows): each emitted batch, for the viewable channels
 
