@@ -233,6 +233,8 @@ class VizChannels:
         keep = self._decimate[source](sim_ns)
         if not keep.all():
             rows, sim_ns = rows[keep], sim_ns[keep]
+            if not len(rows):       # every row in the period of one already sent
+                return
         for topic, (_n, src, _f) in PLOTS.items():
             if src == source:
                 self._write_fixed(topic, sim_ns, _plot_values(topic, rows))

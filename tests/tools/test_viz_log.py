@@ -286,3 +286,16 @@ def test_layout_file_is_generated_and_names_only_channels_that_exist(flight):
         schema = summary.schemas[topics[topic].schema_id].data.decode()
         assert f"float64 {field} " in schema
     assert {"3D!vehicle", "Plot!roll", "Plot!motors", "Plot!rates"} <= set(committed["configById"])
+
+
+def test_a_low_viz_hz_skips_whole_batches(tmp_path):
+    """At 0.5 Hz most 100-row batches hold no new period: nothing to send, nothing fails."""
+    run = synthetic_run(4.0, seed=6)
+    path = tmp_path / "slow.mcap"
+    with LogWriter(path, metadata=run.metadata, viz_hz=0.5, batch_rows=100) as w:
+        write_run(run, w)
+    att = decoded(path, ["/viz/attitude"])["/viz/attitude"]
+    t = run.channels["/gt_att"]["sim_ns"]
+    first_of_period = t[np.unique(t // 2_000_000_000, return_index=True)[1]]
+    assert [m for m, _ in att] == first_of_period.tolist()
+    assert len(att) >= 2
