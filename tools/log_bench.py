@@ -126,11 +126,16 @@ def bench_flight(tmpdir: str, pairs: int, duration_s: float, scenario: str = "S1
     inflate it, and each logged flight is compared with the unlogged one just before it."""
     from .flight import FlightOptions, fly_one_process
 
+    shares = []     # the viewable channels' own CPU time / the loop's, in the same flight
+
     def fly(log: bool, viz_hz: float = 0.0) -> float:
         path = os.path.join(tmpdir, "flight.mcap") if log else None
         s = fly_one_process(FlightOptions(scenario=scenario, duration_s=duration_s,
                                           log_path=path, viz_hz=viz_hz), out=lambda line: None)
         if path:
+            if viz_hz:
+                viz_cpu_s = (read_log(path, channels=[]).end or {}).get("viz_cpu_s", 0.0)
+                shares.append(viz_cpu_s / s["loop_cpu_s"])
             os.unlink(path)
         return s["loop_cpu_s"] / (s["sim_s"] * 1000.0) * 1e6   # us per 1 ms physics step
 
@@ -144,6 +149,10 @@ def bench_flight(tmpdir: str, pairs: int, duration_s: float, scenario: str = "S1
     out = {"scenario": scenario, "pairs": len(b), "duration_s": duration_s,
            "loop_us_per_step_median": float(np.median(b)),
            "loop_us_per_step_min": float(np.min(b))}
+    # Measured in place (thread CPU time around the /viz work, tools/viz_log.py), so the
+    # machine's noise hits the numerator and the denominator alike.
+    out["viz_share_of_loop_pct_median"] = float(np.median(shares) * 100.0)
+    out["viz_us_per_step_median"] = float(np.median(shares) * np.median(viz))
     for key, runs in (("", logged), ("viz_", viz)):
         g = np.array(runs)
         added = g - b
@@ -200,6 +209,8 @@ def main(argv=None) -> int:
         print(f"  real loop A/B        : `fly --processes 1` {lp['scenario']}, {lp['pairs']} pairs "
               f"of {lp['duration_s']:.0f} s flights, loop CPU {lp['loop_us_per_step_median']:.2f}"
               f" us/step median ({lp['loop_us_per_step_min']:.2f} best)")
+        print(f"    /viz work measured in place: {lp['viz_us_per_step_median']:.2f} us/step = "
+              f"{lp['viz_share_of_loop_pct_median']:.1f} % of the logged loop's CPU time")
         for key, label in (("", "--log --viz-hz 0"), ("viz_", "--log (/viz 1 kHz)")):
             print(f"    + {label:18s}: +{lp[key + 'added_us_median']:.2f} us/step = "
                   f"{lp[key + 'added_pct_median']:.1f} % (median of pairs; best against "

@@ -467,8 +467,9 @@ class LogWriter:
                 self._split_stage()
             for stream in self._streams.values():
                 stream.drain(final=True)
-            if self._viz is not None:
+            if self._viz is not None:   # its CPU time goes in the end summary (log_bench)
                 self._viz.close()
+                summary = {"viz_cpu_s": self._viz.cpu_s, **summary}
             end = {"rows": {n: s.rows for n, s in self._streams.items()},
                    "events": self._events,
                    "unknown_records": {str(k): n for k, n in self._unknown.items()},

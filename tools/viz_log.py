@@ -31,6 +31,7 @@ messages can also go to a live view (tools/live_view.py).
 from __future__ import annotations
 
 import struct
+import time
 
 import numpy as np
 
@@ -205,6 +206,7 @@ class VizChannels:
         self._true = _Placed()      # /gt_att -> /viz/tf, /viz/pose
         self._fc = _Placed()        # /fc/status -> /viz/tf_fc, /viz/tf_cmd
         self._closed = False
+        self.cpu_s = 0.0            # thread CPU time spent here: the cost, measured in place
 
     def _register(self, topic, schema_name, schema_encoding, schema_data, msg_encoding):
         if self._mcap is not None:
@@ -226,6 +228,13 @@ class VizChannels:
     def batch(self, source: str, rows: np.ndarray) -> None:
         if not len(rows) or self._closed:
             return
+        t0 = time.thread_time()
+        try:
+            self._batch(source, rows)
+        finally:
+            self.cpu_s += time.thread_time() - t0
+
+    def _batch(self, source: str, rows: np.ndarray) -> None:
         sim_ns = rows["sim_ns"]
         if source == "/gt_nav":
             self._nav(sim_ns, rows["pos_ned_m"])
@@ -325,7 +334,9 @@ class VizChannels:
     def close(self) -> None:
         """Emit the samples still waiting for a position (held at the last one)."""
         if not self._closed:
+            t0 = time.thread_time()
             self._place(final=True)
+            self.cpu_s += time.thread_time() - t0
             self._closed = True
 
 
