@@ -109,15 +109,13 @@ async def _listen(url: str, seconds: float) -> tuple[str, dict, dict]:
         return ws.subprotocol, channels, got
 
 
-@pytest.mark.slow
-def test_fly_live_serves_every_viewable_channel(tmp_path):
-    scenario = tmp_path / "live.toml"
-    scenario.write_text(SCENARIO)
+def _fly_and_listen(scenario) -> tuple[int, str, tuple | None]:
     cmd = [sys.executable, "-m", "silbridge.tools", "fly", "--processes", "1", "--realtime",
            "--no-mavlink", "--scenario", str(scenario), "--live", "127.0.0.1:0",
            "--instance", f"live-{time.monotonic_ns()}"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines: list[str] = []
+    heard = None
     try:
         url = None
         for line in proc.stdout:
@@ -126,17 +124,33 @@ def test_fly_live_serves_every_viewable_channel(tmp_path):
             if m:
                 url = m.group(1)
                 break
-        assert url, "no live view address printed:\n" + "".join(lines)
-        pump = threading.Thread(target=lambda: lines.extend(proc.stdout), daemon=True)
-        pump.start()
-        proto, channels, got = asyncio.run(_listen(url, 5.0))
-        proc.wait(timeout=60)
-        pump.join(timeout=5)
+        if url:
+            pump = threading.Thread(target=lambda: lines.extend(proc.stdout), daemon=True)
+            pump.start()
+            heard = asyncio.run(_listen(url, 5.0))
+            proc.wait(timeout=60)
+            pump.join(timeout=5)
+        else:
+            proc.wait(timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-    assert proc.returncode == 0, "".join(lines)[-3000:]
+    return proc.returncode, "".join(lines), heard
+
+
+@pytest.mark.slow
+def test_fly_live_serves_every_viewable_channel(tmp_path):
+    scenario = tmp_path / "live.toml"
+    scenario.write_text(SCENARIO)
+    # A real-time start on a loaded 2-core machine can miss the bridge's start-up rate
+    # check (the machine, not the live view, was slow for that second): retried twice.
+    for _attempt in range(3):
+        rc, output, heard = _fly_and_listen(scenario)
+        if not (rc != 0 and "start-up check" in output):
+            break
+    assert rc == 0 and heard is not None, output[-3000:]
+    proto, channels, got = heard
     assert proto == "foxglove.sdk.v1"
     assert set(channels) == set(CHANNELS)
     for topic in CHANNELS:
