@@ -10,8 +10,8 @@ from .flight_args import (
     OptionError,
     add_fc_arguments,
     add_mavlink_arguments,
-    add_view_arguments,
     add_transport_arguments,
+    add_view_arguments,
     mavlink_wanted,
     parse_params,
 )

@@ -7,9 +7,9 @@ channel's batch messages are then joined and viewed as one numpy array
 every channel of a 1 kHz run reads back in well under a second. The viewable
 per-sample channels (/viz/..., tools/viz_log.py) sit in uncompressed chunks of
 one channel each, which the scan skips unread (the analysis never needs them);
-compressed chunks (LogWriter compression="lz4"/"zstd") are read record by record. Padding and
-reserved fields are hidden by a view (`RunLog.channels` rows keep the logged
-offsets and itemsize). A message failing
+compressed chunks (LogWriter compression="lz4"/"zstd") are read record by
+record. Padding and reserved fields are hidden by a view (`RunLog.channels`
+rows keep the logged offsets and itemsize). A message failing
 its CRC ends its channel there; `RunLog.read_error` says what was wrong and
 the integrity check (tools/integrity.py) refuses such a log.
 """
