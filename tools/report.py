@@ -111,8 +111,9 @@ def box_plots(results, out_dir: Path) -> list[tuple[str, str]]:
         ax.set_title(f"{label} per scenario ({len(results) // max(len(names), 1)} runs each)")
         fig.tight_layout()
         files.append((f"box_{key}.png",
-                       f"{label} [{unit}] of every run, per scenario and controller (box: quartiles and "
-                       "median; whiskers: 1.5 interquartile ranges; circles: outliers)."))
+                       f"{label} [{unit}] of every run, per scenario and controller (box: "
+                       "quartiles and median; whiskers: 1.5 interquartile ranges; circles: "
+                       "outliers)."))
         fig.savefig(out_dir / files[-1][0], dpi=110)
         plt.close(fig)
     return files

@@ -37,7 +37,7 @@ SUBPROTOCOLS = ["foxglove.websocket.v1", "foxglove.sdk.v1"]
 # A command change and a push during the few seconds the client listens.
 SCENARIO = """
 name = "live"
-description = "pitch step at 2 s, push north from 2.5 to 3.5 s (on the ground: only the logs matter)"
+description = "pitch step at 2 s, push north from 2.5 to 3.5 s (on the ground)"
 seed = 9
 duration_s = 6.0
 takeoff_alt_m = 10.0
