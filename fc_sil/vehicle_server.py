@@ -31,6 +31,7 @@ class MavlinkOptions:
     param_file: str | None = None                   # --params FILE (.parm, saved atomically)
     mission_file: str | None = None                 # --mission FILE (QGC WPL 110)
     serve: bool = True                              # False: the vehicle without a server
+    tlog: str | None = None                         # --tlog FILE: the GCS traffic (mavlink/tlog.py)
 
 
 def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None = None,
@@ -71,8 +72,18 @@ def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None 
             out(f"parameter file: {p}")
     if opts.serve:
         sysid = int(store.get("SYSID_THISMAV")[0])
-        server = GcsServer(vehicle, store, opts.endpoints or None, sysid=sysid, compid=1,
-                           param_file=opts.param_file, missions=missions)
+        tlog = None
+        if opts.tlog:       # opened first: a bad path fails before any socket is open
+            from silbridge.mavlink.tlog import TlogWriter
+            tlog = TlogWriter(opts.tlog)
+        try:
+            server = GcsServer(vehicle, store, opts.endpoints or None, sysid=sysid, compid=1,
+                               param_file=opts.param_file, missions=missions)
+        except Exception:
+            if tlog is not None:
+                tlog.close()
+            raise
+        server.tlog = tlog
         vehicle.attach_server(server)
         server.start()
         for p in problems[:10]:

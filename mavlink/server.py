@@ -124,6 +124,8 @@ class GcsServer:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.stats = collections.Counter()
+        # mavlink.tlog.TlogWriter or None: both directions of the GCS traffic (--tlog).
+        self.tlog = None
 
     # ============================================================================================
     # API for the vehicle thread and for anyone
@@ -209,6 +211,8 @@ class GcsServer:
         self._thread = None
         self._save_params_now()
         self._close_sockets()
+        if self.tlog is not None:
+            self.tlog.close()
 
     def serve_until(self, stop: Callable[[], bool] | None = None,
                     timeout_s: float | None = None) -> None:
@@ -251,6 +255,8 @@ class GcsServer:
                     self._add_link(client, now)
             else:
                 for msg in r.receive():
+                    if self.tlog is not None:
+                        self.tlog.message(msg)
                     self._dispatch(r, msg, now)
         for w in writable:
             w.flush()
@@ -318,17 +324,22 @@ class GcsServer:
             pass     # pipe full (a wake-up is already pending) or closed
 
     # -- output side used by the protocol handlers ----------------------------------------------------
-    def send(self, link: Link, msg) -> None:
+    def send(self, link: Link, msg, *, to_tlog: bool = True) -> None:
         try:
             link.send(msg)
         except (struct.error, ValueError, TypeError, OverflowError):
             self.stats["tx_encode_errors"] += 1
             log.exception("cannot encode %s", msg.get_type())
+            return
+        if to_tlog and self.tlog is not None:
+            self.tlog.message(msg)
 
     def broadcast(self, msg) -> None:
+        logged = False      # one tlog record for the frame, whatever the number of links
         for link in self._links:
             if link.can_send:
-                self.send(link, msg)
+                self.send(link, msg, to_tlog=not logged)
+                logged = True
 
     def statustext(self, severity: int, text: str) -> None:
         self._statustext_id = self._statustext_id % 255 + 1

@@ -108,7 +108,8 @@ class ArduPilotLogSink:
 
     def __init__(self, path, *, metadata: dict, target: AttitudeTarget, duration_s: float,
                  command=None):
-        self.writer = LogWriter(path, metadata=metadata)
+        # Campaign runs leave the viewable /viz channels off (docs/logs.md).
+        self.writer = LogWriter(path, metadata=metadata, viz_hz=0)
         self.writer.declare(TIMING_CHANNEL, TIMING_DTYPE)
         # One struct pack per row (LogWriter.pack): numpy field stores cost ~1 us each.
         self.writer.declare(STATUS_CHANNEL, AP_STATUS_DTYPE)

@@ -38,6 +38,7 @@ class RunSpec:
     fc: str = "ours"              # ours | ardupilot (ArduCopter SITL over the JSON interface)
     sitl: str | None = None       # fc == ardupilot: the arducopter binary
     sitl_speedup: float = 50.0    # fc == ardupilot: SITL --speedup
+    viz_hz: float = 0.0           # the log's viewable channels (off in campaigns: their cost)
 
 
 @dataclass
@@ -52,7 +53,7 @@ class RunResult:
 def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_seed: int = 1,
                imu_hz=None, params=(), features_off=(), variant="full", windows=None,
                keep_logs: str = "all", fc: str = "ours", sitl: str | None = None,
-               sitl_speedup: float = 50.0):
+               sitl_speedup: float = 50.0, viz_hz: float = 0.0):
     """One RunSpec per (scenario, run). keep_logs: all | first (run 0 of each
     scenario, enough for the report's traces) | none. A 120 s log is ~45 MB."""
     if keep_logs not in ("all", "first", "none"):
@@ -66,7 +67,7 @@ def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_s
                                  duration_s=duration_s, log_path=str(log), imu_hz=imu_hz,
                                  params=tuple(params), features_off=tuple(features_off),
                                  variant=variant, fc=fc, sitl=sitl,
-                                 sitl_speedup=sitl_speedup,
+                                 sitl_speedup=sitl_speedup, viz_hz=viz_hz,
                                  windows=windows or RunSpec.windows,
                                  keep_log=keep_logs == "all" or (keep_logs == "first"
                                                                  and i == 0)))
@@ -90,7 +91,7 @@ def run_one(spec: RunSpec) -> RunResult:
                          processes=1, imu_hz=spec.imu_hz, seed=spec.seed,
                          instance=f"bench-{os.getpid()}-{spec.variant}-{spec.run_index}",
                          log_path=spec.log_path, params=dict(spec.params),
-                         features_off=spec.features_off)
+                         features_off=spec.features_off, viz_hz=spec.viz_hz)
     summary = fly_one_process(opts, out=lambda s: None)
     return _result_from_log(spec, summary, t0)
 

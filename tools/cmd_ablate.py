@@ -50,7 +50,7 @@ def run(args) -> int:
         all_specs += make_specs(scenarios, args.runs, args.duration, out_dir,
                                 base_seed=args.seed, imu_hz=args.imu_hz, params=params,
                                 features_off=off, variant=label, windows=windows,
-                                keep_logs=args.keep_logs)
+                                keep_logs=args.keep_logs, viz_hz=args.viz_hz)
     t0 = time.monotonic()
     results = run_campaign(all_specs, jobs=args.jobs, executor=args.executor,
                            ray_address=args.ray_address, label="ablate")

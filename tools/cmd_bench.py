@@ -41,6 +41,9 @@ def add_campaign_arguments(p) -> None:
                    help="MCAP logs to keep (~45 MB per 120 s run): all, first run of each "
                         "scenario (default; the report's traces use it), none")
     p.add_argument("--no-report", action="store_true", help="skip the plots and index page")
+    p.add_argument("--viz-hz", type=float, default=0.0, metavar="N",
+                   help="viewable /viz channels in our FC's logs at N Hz (default 0: off in "
+                        "campaigns, their cost; `fly --log` has them at 1000)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -110,7 +113,7 @@ def run(args) -> int:
         specs += make_specs(scenarios, args.runs, args.duration, out_dir, base_seed=args.seed,
                             imu_hz=args.imu_hz, params=params if fc == "ours" else (),
                             windows=windows, keep_logs=args.keep_logs, fc=fc, sitl=sitl,
-                            sitl_speedup=args.sitl_speedup,
+                            sitl_speedup=args.sitl_speedup, viz_hz=args.viz_hz,
                             variant="full" if fc == "ours" else "ardupilot")
     t0 = time.monotonic()
     results = run_campaign(specs, jobs=args.jobs, executor=args.executor,

@@ -7,9 +7,11 @@ import sys
 
 from .flight import FlightOptions, close_fc_loop, make_fc_loop, mavlink_options
 from .flight_args import (
+    OptionError,
     add_fc_arguments,
     add_mavlink_arguments,
     add_transport_arguments,
+    add_view_arguments,
     mavlink_wanted,
     parse_params,
 )
@@ -30,6 +32,7 @@ def add_arguments(p) -> None:
                    help="write the run's MCAP log from the FC side")
     p.add_argument("--log-meta", default=None, metavar="FILE.json",
                    help="start metadata for --log (config, scenario), as `fly` passes it")
+    add_view_arguments(p)
     p.add_argument("--json", action="store_true", help="print the FC summary as JSON")
 
 
@@ -47,7 +50,10 @@ def run(args) -> int:
         mav_opts = mavlink_options(FlightOptions(
             mavlink=mavlink_wanted(args, realtime), gcs_urls=tuple(args.gcs),
             no_default_gcs=args.no_default_gcs, param_file=args.param_file,
-            mission_file=args.mission_file))
+            mission_file=args.mission_file, tlog=args.tlog))
+        if args.tlog and mav_opts is None:
+            raise OptionError("--tlog logs the MAVLink GCS traffic: fly the MAVLink vehicle "
+                              "(--mavlink) or leave --tlog out")
         loop = make_fc_loop(seg, params=params, features_off=tuple(args.feature_off),
                             mavlink=mav_opts, out=out)
         guard_fc(loop)
@@ -73,16 +79,17 @@ def run(args) -> int:
 
 def _open_log(args, loop):
     """The FC-side MCAP log of `fc --log` (fly --processes 2 --log passes the metadata)."""
-    if not args.log:
+    if not args.log and args.live is None:
         return None
-    from .run_log import RunLogSink
+    from .run_log import open_run_sink
 
     meta = {}
     if args.log_meta:
         with open(args.log_meta) as fh:
             meta = json.load(fh)
     meta["params"] = loop.core.params()
-    sink = RunLogSink(args.log, metadata=meta, fc_logs_pwm=True)
+    sink = open_run_sink(args.log, meta, viz_hz=args.viz_hz, live=args.live,
+                         out=lambda s: print(s, file=sys.stderr))
     loop.sink = sink
     if getattr(loop.supervisor, "sink", "absent") is None:
         loop.supervisor.sink = sink

@@ -13,6 +13,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 from dataclasses import dataclass
 
 from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
@@ -52,6 +53,9 @@ class FlightOptions:
     mission_file: str | None = None     # --mission FILE (QGC WPL 110)
     transport: str = "shm"              # shm | udp | tcp (MAVLink HIL, tools/transport_wiring.py)
     hil_addr: str | None = None         # udp/tcp: the bridge's listen address (default: any port)
+    viz_hz: float | None = None         # viewable log channels [Hz]; None: VIZ_HZ_DEFAULT; 0: none
+    live: str | None = None             # --live HOST:PORT: serve the viewable channels (Foxglove)
+    tlog: str | None = None             # --tlog FILE: the MAVLink GCS traffic
 
 
 def default_instance() -> str:
@@ -104,7 +108,8 @@ def mavlink_options(opts: FlightOptions):
     urls = [] if opts.no_default_gcs else list(DEFAULT_GCS_URLS)
     urls += [u for u in opts.gcs_urls if u not in urls]
     return MavlinkOptions(endpoints=[parse_endpoint(u) for u in urls],
-                          param_file=opts.param_file, mission_file=opts.mission_file)
+                          param_file=opts.param_file, mission_file=opts.mission_file,
+                          tlog=opts.tlog)
 
 
 def mavlink_cli_args(opts: FlightOptions) -> list[str]:
@@ -120,6 +125,8 @@ def mavlink_cli_args(opts: FlightOptions) -> list[str]:
         args += ["--params", opts.param_file]
     if opts.mission_file:
         args += ["--mission", opts.mission_file]
+    if opts.tlog:
+        args += ["--tlog", opts.tlog]
     return args
 
 
@@ -169,12 +176,12 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
             fc = make_fc_loop(fc_seg, params=opts.params, features_off=opts.features_off,
                               mavlink=mavlink_options(opts), out=out)
             guard_fc(fc)
-            if opts.log_path:
-                from .run_log import RunLogSink
+            if opts.log_path or opts.live is not None:
+                from .run_log import open_run_sink
                 # The FC's C core logs the PWM it computes (the same records the
                 # bridge receives in lockstep): one memcpy instead of a Python call.
-                sink = RunLogSink(opts.log_path, fc_logs_pwm=True,
-                                  metadata=run_metadata(opts, sc, sim, cfg, fc.core))
+                sink = open_run_sink(opts.log_path, run_metadata(opts, sc, sim, cfg, fc.core),
+                                     viz_hz=opts.viz_hz, live=opts.live, out=out)
                 fc.sink = sink
                 fc.supervisor.sink = sink
             try:
@@ -216,14 +223,20 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
         for feature in opts.features_off:
             cmd += ["--feature-off", feature]
         cmd += mavlink_cli_args(opts)
-        if opts.log_path:
+        meta_path = None
+        if opts.log_path or opts.live is not None:
             # The FC process writes the log (it sees every record and its own PWM);
             # it adds the parameter set to the metadata the bridge side knows.
-            meta_path = f"{opts.log_path}.meta.json"
+            meta_path = f"{opts.log_path}.meta.json" if opts.log_path else \
+                os.path.join(tempfile.gettempdir(), f"{name}.meta.json")
             meta = run_metadata(opts, sc, sim, cfg, None)
             with open(meta_path, "w") as fh:
                 json.dump(meta, fh)
-            cmd += ["--log", opts.log_path, "--log-meta", meta_path]
+            cmd += ["--log-meta", meta_path] + (["--log", opts.log_path] if opts.log_path else [])
+            if opts.viz_hz is not None:
+                cmd += ["--viz-hz", str(opts.viz_hz)]
+            if opts.live is not None:
+                cmd += ["--live", opts.live]
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
         try:
             res = run_bridge(sim, seg, cfg, peer_check=lambda: proc.poll() is None,
@@ -235,8 +248,9 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
                 proc.wait()
     fc_summary = last_json_line(stdout)
     summary = summarise(opts, sc, sim, res, fc_summary)
+    if meta_path:
+        os.unlink(meta_path)
     if opts.log_path:
-        os.unlink(f"{opts.log_path}.meta.json")
         summary["log"] = opts.log_path
     return summary
 

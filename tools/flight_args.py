@@ -40,7 +40,19 @@ def add_flight_arguments(p: argparse.ArgumentParser, *, processes: bool) -> None
     if processes:
         p.add_argument("--log", default=None, metavar="FILE.mcap",
                        help="write the run's MCAP log (open it in Foxglove; `silbridge analyze`)")
+        add_view_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def add_view_arguments(p: argparse.ArgumentParser) -> None:
+    """--viz-hz and --live: the log's viewable channels (tools/viz_log.py, docs/logs.md)."""
+    p.add_argument("--viz-hz", type=float, default=None, metavar="N",
+                   help="viewable per-sample log channels (/viz/...: Foxglove plots and 3D) "
+                        "at most N messages per second each (default 1000: every sample; "
+                        "3D at most 100, scene 10; 0: none)")
+    p.add_argument("--live", nargs="?", const="", default=None, metavar="HOST:PORT",
+                   help="serve the viewable channels live over Foxglove's WebSocket protocol "
+                        "(default 127.0.0.1:8765; port 0: a free one)")
 
 
 def add_transport_arguments(p: argparse.ArgumentParser, *, listen: bool) -> None:
@@ -80,6 +92,9 @@ def add_mavlink_arguments(p: argparse.ArgumentParser) -> None:
                         "every PARAM_SET (created if missing)")
     p.add_argument("--mission", dest="mission_file", default=None, metavar="FILE",
                    help="QGC WPL 110 mission: loaded at start, saved after every upload")
+    p.add_argument("--tlog", default=None, metavar="FILE.tlog",
+                   help="MAVLink telemetry log of the GCS traffic, both directions (MAVProxy's "
+                        "format: mavlogdump.py, MAVExplorer)")
 
 
 def mavlink_wanted(args, realtime: bool) -> bool:
@@ -108,12 +123,17 @@ def options_from_args(args) -> FlightOptions:
         raise OptionError("--duration must be > 0")
     if args.imu_hz is not None and args.imu_hz <= 0:
         raise OptionError("--imu-hz must be > 0")
+    if getattr(args, "viz_hz", None) is not None and args.viz_hz < 0:
+        raise OptionError("--viz-hz must be >= 0 (0: no viewable channels)")
     realtime = bool(args.realtime or args.speed is not None)
     mav_extra = {}
     if hasattr(args, "no_default_gcs"):
         mav_extra = dict(mavlink=mavlink_wanted(args, realtime), gcs_urls=tuple(args.gcs),
                          no_default_gcs=args.no_default_gcs, param_file=args.param_file,
-                         mission_file=args.mission_file)
+                         mission_file=args.mission_file, tlog=args.tlog)
+        if args.tlog and not mav_extra["mavlink"]:
+            raise OptionError("--tlog logs the MAVLink GCS traffic: fly the MAVLink vehicle "
+                              "(--mavlink, the default in real time) or leave --tlog out")
     return FlightOptions(
         scenario=args.scenario, duration_s=args.duration, lockstep=not realtime,
         speed=args.speed if args.speed is not None else 1.0,
@@ -121,5 +141,6 @@ def options_from_args(args) -> FlightOptions:
         processes=getattr(args, "processes", 2), imu_hz=args.imu_hz, seed=args.seed,
         instance=args.instance, params=parse_params(args.param),
         transport=getattr(args, "transport", "shm"), hil_addr=getattr(args, "hil_addr", None),
-        log_path=getattr(args, "log", None),
+        log_path=getattr(args, "log", None), viz_hz=getattr(args, "viz_hz", None),
+        live=getattr(args, "live", None),
         features_off=tuple(args.feature_off), **mav_extra)

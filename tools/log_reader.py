@@ -4,9 +4,12 @@ One pass over the MCAP records with the mcap stream reader (no index needed,
 so a file cut short by a killed writer reads up to its cut); the rows of each
 channel's batch messages are then joined and viewed as one numpy array
 (tools/log_schema.py: the rows' CDR bytes are their numpy bytes): 120 s of
-every channel of a 1 kHz run reads back in well under a second. Padding and
-reserved fields are hidden by a view (`RunLog.channels` rows keep the logged
-offsets and itemsize). A message failing
+every channel of a 1 kHz run reads back in well under a second. The viewable
+per-sample channels (/viz/..., tools/viz_log.py) sit in uncompressed chunks of
+one channel each, which the scan skips unread (the analysis never needs them);
+compressed chunks (LogWriter compression="lz4"/"zstd") are read record by
+record. Padding and reserved fields are hidden by a view (`RunLog.channels`
+rows keep the logged offsets and itemsize). A message failing
 its CRC ends its channel there; `RunLog.read_error` says what was wrong and
 the integrity check (tools/integrity.py) refuses such a log.
 """
@@ -19,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 from mcap.exceptions import EndOfFile
-from mcap.records import Channel, Footer, Message, Metadata
-from mcap.stream_reader import StreamReader
+from mcap.records import Channel, Chunk, Footer, Message, Metadata
+from mcap.stream_reader import StreamReader, breakup_chunk
 
 from silbridge.tools.log_format import (CHANNEL_DTYPE_KEY, EVENTS_CHANNEL, MCAP_MAGIC,
                                         META_END, META_RUN, LogError)
@@ -126,19 +129,31 @@ def _scan(f, size: int, wanted: list[str] | None):
     cut = damage = None
     keep = (lambda topic: True) if wanted is None else \
         (lambda topic: topic in wanted or topic == EVENTS_CHANNEL)
-    reader = StreamReader(f, validate_crcs=True, record_size_limit=None)
+    # No running CRC over the whole data section: our writer leaves its CRC 0 (every batch
+    # carries its own CRC-32), and compressed chunks are checked when broken up below.
+    reader = StreamReader(f, validate_crcs=False, record_size_limit=None, emit_chunks=True)
+
+    def take(rec) -> None:
+        if isinstance(rec, Message):
+            ch = chans.get(rec.channel_id)
+            if ch is not None and keep(ch.topic):
+                messages.setdefault(rec.channel_id, []).append(rec.data)
+        elif isinstance(rec, Channel):
+            chans.setdefault(rec.id, rec)
+        elif isinstance(rec, Metadata):
+            meta[rec.name] = rec.metadata
+
     try:
         for rec in reader.records:
-            if isinstance(rec, Message):
-                ch = chans.get(rec.channel_id)
-                if ch is not None and keep(ch.topic):
-                    messages.setdefault(rec.channel_id, []).append(rec.data)
-            elif isinstance(rec, Channel):
-                chans.setdefault(rec.id, rec)
-            elif isinstance(rec, Metadata):
-                meta[rec.name] = rec.metadata
+            if isinstance(rec, Chunk):
+                if _skip_chunk(rec, chans, keep):
+                    continue
+                for inner in breakup_chunk(rec, validate_crc=True):
+                    take(inner)
             elif isinstance(rec, Footer):
                 footer = True
+            else:
+                take(rec)
     except EndOfFile:
         cut = f"file ends inside a record (cut at byte {size})"
     except Exception as exc:  # noqa: BLE001 - any decoder error ends the readable part
@@ -147,3 +162,13 @@ def _scan(f, size: int, wanted: list[str] | None):
     if not footer and cut is None and damage is None:
         cut = f"file ends without an MCAP footer (cut at byte {size})"
     return chans, messages, meta, cut, damage
+
+
+def _skip_chunk(chunk: Chunk, chans: dict, keep) -> bool:
+    """True for an uncompressed chunk whose first message is on a channel not wanted, or on
+    one holding no batches: the one-channel chunks of the viewable channels."""
+    data = chunk.data
+    if chunk.compression or len(data) < 11 or data[0] != 0x05:   # 0x05: a Message record
+        return False
+    ch = chans.get(int.from_bytes(data[9:11], "little"))
+    return ch is not None and (CHANNEL_DTYPE_KEY not in ch.metadata or not keep(ch.topic))

@@ -153,6 +153,25 @@ def ros2msg_schema(row_dtype: np.dtype, type_stem: str, title: str) -> bytes:
     return text.encode()
 
 
+_STRUCT_CODES = {("b", 1): "?", ("i", 1): "b", ("u", 1): "B", ("i", 2): "h", ("u", 2): "H",
+                 ("i", 4): "i", ("u", 4): "I", ("i", 8): "q", ("u", 8): "Q",
+                 ("f", 4): "f", ("f", 8): "d"}
+
+
+def row_struct(dtype: np.dtype) -> struct.Struct | None:
+    """A struct packing one row of `dtype` from its flattened field values (None if it can't)."""
+    fmt, pos = "<", 0
+    for name, (sub, offset, *_) in sorted(dtype.fields.items(), key=lambda kv: kv[1][1]):
+        code = _STRUCT_CODES.get((sub.base.kind, sub.base.itemsize))
+        if code is None or offset < pos or sub.base.byteorder == ">":
+            return None
+        fmt += "x" * (offset - pos) + code * max(1, int(np.prod(sub.shape)))
+        pos = offset + sub.itemsize
+    fmt += "x" * (dtype.itemsize - pos)
+    packer = struct.Struct(fmt)
+    return packer if packer.size == dtype.itemsize else None
+
+
 class BatchCodec:
     """Byte layout of batch messages of one row dtype (which must be a CDR layout).
 

@@ -44,7 +44,6 @@ at most `batch_rows` rows per channel and the records staged by
 from __future__ import annotations
 
 import json
-import struct
 from pathlib import Path
 
 import numpy as np
@@ -55,8 +54,10 @@ from silbridge.tools.log_format import (CHANNEL_DTYPE_KEY, EVENTS_CHANNEL, KIND_
                                         STATUS_CHANNEL, TIMING_CHANNEL, TIMING_DTYPE,
                                         LogError, to_json)
 from silbridge.tools.log_reader import RunLog, read_log
-from silbridge.tools.log_schema import BatchCodec, dtype_to_json, ros2msg_schema, row_layout
-from silbridge.tools.mcap_writer import LibraryMcap, McapFile
+from silbridge.tools.log_schema import (BatchCodec, dtype_to_json, ros2msg_schema, row_layout,
+                                        row_struct)
+from silbridge.tools.mcap_writer import LibraryMcap, McapFile, NullMcap
+from silbridge.tools.viz_log import VIZ_HZ_DEFAULT
 
 # The public face of the log package: one import for writers and readers.
 __all__ = ["LogWriter", "LogError", "RunLog", "read_log", "TIMING_DTYPE", "KIND_CHANNELS",
@@ -80,25 +81,6 @@ _EVENT_SCHEMA = {
 }
 
 
-_STRUCT_CODES = {("b", 1): "?", ("i", 1): "b", ("u", 1): "B", ("i", 2): "h", ("u", 2): "H",
-                 ("i", 4): "i", ("u", 4): "I", ("i", 8): "q", ("u", 8): "Q",
-                 ("f", 4): "f", ("f", 8): "d"}
-
-
-def _row_struct(dtype: np.dtype) -> struct.Struct | None:
-    """A struct packing one row of `dtype` from its flattened field values (None if it can't)."""
-    fmt, pos = "<", 0
-    for name, (sub, offset, *_) in sorted(dtype.fields.items(), key=lambda kv: kv[1][1]):
-        code = _STRUCT_CODES.get((sub.base.kind, sub.base.itemsize))
-        if code is None or offset < pos or sub.base.byteorder == ">":
-            return None
-        fmt += "x" * (offset - pos) + code * max(1, int(np.prod(sub.shape)))
-        pos = offset + sub.itemsize
-    fmt += "x" * (dtype.itemsize - pos)
-    packer = struct.Struct(fmt)
-    return packer if packer.size == dtype.itemsize else None
-
-
 class _Stream:
     """One channel being written.
 
@@ -110,7 +92,8 @@ class _Stream:
     """
 
     __slots__ = ("name", "channel_id", "in_dtype", "row_dtype", "itemsize", "pending",
-                 "batch_bytes", "capacity", "codec", "rows", "last_sim_ns", "packer", "_mcap")
+                 "batch_bytes", "capacity", "codec", "rows", "last_sim_ns", "packer", "_mcap",
+                 "tap")
 
     def __init__(self, mcap, name: str, in_dtype: np.dtype, capacity: int):
         row_dtype = row_layout(in_dtype)
@@ -131,8 +114,9 @@ class _Stream:
         self.batch_bytes = capacity * in_dtype.itemsize
         self.rows = 0
         self.last_sim_ns = 0
-        self.packer = _row_struct(in_dtype)
+        self.packer = row_struct(in_dtype)
         self._mcap = mcap
+        self.tap = None     # tap(rows): each emitted batch, for the viewable channels
 
     def drain(self, final: bool = False) -> None:
         """Emit every full batch in `pending` (and, if final, the partial rest)."""
@@ -157,6 +141,8 @@ class _Stream:
         self._mcap.add_message(self.channel_id, first_ns, first_ns, self.rows & 0xFFFFFFFF,
                                self.codec.encode(raw, sim_ns))
         self.rows += len(rows)
+        if self.tap is not None:
+            self.tap(rows)
 
     def buffered_rows(self) -> int:
         return len(self.pending) // self.itemsize
@@ -177,20 +163,33 @@ class LogWriter:
                    package (files 2-5x smaller, for archiving; slower; a
                    killed run loses the open chunk).
       chunk_bytes  MCAP chunk size when compressing.
+      viz_hz       the viewable per-sample channels (/viz/..., tools/viz_log.py) at
+                   most this many messages per second each; 0: none.
+      live         a tools.live_view.LiveView: the same viewable channels served
+                   over Foxglove's WebSocket protocol while the run goes on; the
+                   batches are then also cut at every capture flush. path None
+                   with a live view: no file.
     Use as a context manager or call close(); both flush partial batches.
     """
 
-    def __init__(self, path: str | Path, *, metadata: dict, batch_rows: int = 1024,
-                 compression: str = "none", chunk_bytes: int = 1 << 20):
+    def __init__(self, path: str | Path | None, *, metadata: dict, batch_rows: int = 1024,
+                 compression: str = "none", chunk_bytes: int = 1 << 20,
+                 viz_hz: float = VIZ_HZ_DEFAULT, live=None):
         if batch_rows < 1:
             raise ValueError("batch_rows must be >= 1")
         if compression not in ("none", "lz4", "zstd"):
             raise ValueError("compression must be one of none, lz4, zstd")
-        self.path = Path(path)
+        if viz_hz < 0:
+            raise ValueError("viz_hz must be >= 0 (0: no viewable channels)")
+        self.path = None if path is None else Path(path)
         library = f"silbridge-log/{LOG_FORMAT_VERSION}"
         try:
-            self._mcap = McapFile(self.path, library=library) if compression == "none" else \
-                LibraryMcap(self.path, compression, chunk_bytes, library=library)
+            if path is None:       # a live view without a file
+                self._mcap = NullMcap()
+            elif compression == "none":
+                self._mcap = McapFile(self.path, library=library)
+            else:
+                self._mcap = LibraryMcap(self.path, compression, chunk_bytes, library=library)
         except OSError as exc:
             raise LogError(f"cannot create log {self.path}: {exc.strerror}; "
                            "choose a writable path") from exc
@@ -216,6 +215,14 @@ class LogWriter:
             json.dumps({"title": "silbridge.RunMetadata", "type": "object"}).encode())
         run_channel = self._mcap.register_channel(RUN_CHANNEL, "json", run_schema)
         self._mcap.add_message(run_channel, 0, 0, 0, [run_json.encode()])
+        # The viewable per-sample channels (tools/viz_log.py), fed by each emitted batch;
+        # with a live view, every capture flush also emits the partial batches.
+        self._viz = None
+        if viz_hz > 0 or live is not None:
+            from .viz_log import VizChannels
+            self._viz = VizChannels(None if path is None else self._mcap, metadata,
+                                    viz_hz or VIZ_HZ_DEFAULT, live=live)
+        self._flush_partial = live is not None
 
     # -- rows -------------------------------------------------------------
     def _open(self, channel: str, dtype: np.dtype) -> _Stream:
@@ -224,6 +231,8 @@ class LogWriter:
         if channel in (EVENTS_CHANNEL, RUN_CHANNEL):
             raise ValueError(f"{channel} is reserved; use event()")
         stream = self._streams[channel] = _Stream(self._mcap, channel, dtype, self.batch_rows)
+        if self._viz is not None:
+            stream.tap = self._viz.tap(channel, dtype)
         return stream
 
     def declare(self, channel: str, dtype: np.dtype) -> None:
@@ -374,11 +383,13 @@ class LogWriter:
 
     def _capture_flush(self) -> None:
         opened = len(self._streams)
-        if len(self._stage) >= self._stage_bytes or (self._stage and self._rebind_pending()):
+        if len(self._stage) >= self._stage_bytes or \
+                (self._stage and (self._flush_partial or self._rebind_pending())):
             self._split_stage()
         for stream in self._streams.values():
-            if len(stream.pending) >= stream.batch_bytes:
-                stream.drain()
+            if len(stream.pending) >= stream.batch_bytes or \
+                    (self._flush_partial and stream.pending):
+                stream.drain(final=self._flush_partial)
         if len(self._streams) != opened and self._capture_rebind is not None:
             self._capture_rebind()
 
@@ -456,6 +467,9 @@ class LogWriter:
                 self._split_stage()
             for stream in self._streams.values():
                 stream.drain(final=True)
+            if self._viz is not None:   # its CPU time goes in the end summary (log_bench)
+                self._viz.close()
+                summary = {"viz_cpu_s": self._viz.cpu_s, **summary}
             end = {"rows": {n: s.rows for n, s in self._streams.items()},
                    "events": self._events,
                    "unknown_records": {str(k): n for k, n in self._unknown.items()},

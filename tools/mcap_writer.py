@@ -11,8 +11,10 @@ What it writes (MCAP spec, mcap.dev/spec): magic, Header, then Schema,
 Channel, Message and Metadata records in call order; on finish, DataEnd and
 a summary section (schemas, channels, Statistics, MetadataIndex records and
 their SummaryOffsets), the Footer (summary CRC included) and the magic. No
-chunks, so no chunk or message indexes: readers scan the file linearly. The
-mcap package reads these files back (tests/tools/test_mcap_log.py).
+chunk or message indexes: readers scan the file linearly. The only chunks are
+the uncompressed one-channel chunks of `add_message_records` (the viewable
+per-sample channels, tools/viz_log.py). The mcap package reads these files
+back (tests/tools/test_mcap_log.py).
 
 `LibraryMcap` puts the `mcap` package's Writer behind the same four calls,
 for compressed (chunked) logs.
@@ -28,12 +30,16 @@ from mcap.writer import CompressionType, Writer
 
 MAGIC = b"\x89MCAP0\r\n"
 
-OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE = 0x01, 0x02, 0x03, 0x04, 0x05
+OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = \
+    0x01, 0x02, 0x03, 0x04, 0x05, 0x06
 OP_STATISTICS, OP_METADATA, OP_METADATA_INDEX, OP_SUMMARY_OFFSET, OP_DATA_END = \
     0x0B, 0x0C, 0x0D, 0x0E, 0x0F
 
 _RECORD = struct.Struct("<BQ")           # opcode, content length
 _MESSAGE = struct.Struct("<BQHIQQ")      # record prefix + channel, sequence, log, publish time
+# record prefix + message start/end time, uncompressed size and CRC (0: not computed),
+# compression "" (length 0), records length
+_CHUNK = struct.Struct("<BQQQQIIQ")
 
 
 def _string(s: str) -> bytes:
@@ -66,6 +72,7 @@ class McapFile:
         self._metadata_index: list[tuple[int, int, str]] = []
         self._counts: dict[int, int] = {}
         self._messages = 0
+        self._chunks = 0
         self._start_ns: int | None = None
         self._end_ns = 0
         self._write(MAGIC + _record(OP_HEADER, _string(profile) + _string(library)))
@@ -112,6 +119,25 @@ class McapFile:
         self._start_ns = log_time if self._start_ns is None else min(self._start_ns, log_time)
         self._end_ns = max(self._end_ns, log_time)
 
+    def add_message_records(self, channel_id: int, records, count: int, start_ns: int,
+                            end_ns: int) -> None:
+        """`count` complete Message records of one channel (tools/viz_codec.py builds them
+        in bulk) as one uncompressed Chunk, in one write. Readers that want other
+        channels skip the chunk without parsing it (tools/log_reader.py); no chunk
+        index is written, so every reader scans the file and sees both kinds."""
+        size = len(records)
+        head = _CHUNK.pack(OP_CHUNK, 8 + 8 + 8 + 4 + 4 + 8 + size, start_ns, end_ns, size, 0,
+                           0, size)
+        written = os.writev(self._fd, [head, records])
+        if written != len(head) + size:
+            self._write_all(b"".join([head, bytes(records)])[written:])
+        self._pos += len(head) + size
+        self._counts[channel_id] += count
+        self._messages += count
+        self._chunks += 1
+        self._start_ns = start_ns if self._start_ns is None else min(self._start_ns, start_ns)
+        self._end_ns = max(self._end_ns, end_ns)
+
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
         rec = _record(OP_METADATA, _string(name) + _string_map(data))
         self._metadata_index.append((self._pos, len(rec), name))
@@ -150,7 +176,7 @@ class McapFile:
     def _statistics(self) -> bytes:
         counts = b"".join(struct.pack("<HQ", cid, n) for cid, n in self._counts.items())
         return struct.pack("<QHIIIIQQ", self._messages, len(self._schemas), len(self._channels),
-                           0, len(self._metadata_index), 0, self._start_ns or 0,
+                           0, len(self._metadata_index), self._chunks, self._start_ns or 0,
                            self._end_ns) + _bytes(counts)
 
 
@@ -179,3 +205,27 @@ class LibraryMcap:
     def close(self) -> None:
         if not self._f.closed:
             self._f.close()
+
+
+class NullMcap:
+    """McapFile's calls, writing nothing: a live view without a log file (tools/live_view.py)
+    still runs the writer's batching, which feeds the viewable channels."""
+
+    def __init__(self):
+        self._ids = 0
+
+    def _next(self, *_args, **_kw) -> int:
+        self._ids += 1
+        return self._ids
+
+    register_schema = register_channel = _next
+
+    def add_message(self, *_args) -> None:
+        pass
+
+    add_message_records = add_metadata = add_message
+
+    def finish(self) -> None:
+        pass
+
+    close = finish

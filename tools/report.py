@@ -1,20 +1,22 @@
 """The campaign's report folder: PNG plots and an index page.
 
-For each scenario the first run's log gives the traces (attitude error, PWM,
-yaw rate); all runs give the per-metric box plots. Everything is recomputed
-from the logs and the results, so a report can be rebuilt from a campaign's
-output folder alone.
+For each scenario (and controller) the first run's log gives the traces
+(attitude error, PWM, yaw rate); all runs give the per-metric box plots. Each
+plot comes with its caption; the page itself is tools/report_html.py.
+Everything is recomputed from the logs and the results, so a report can be
+rebuilt from a campaign's output folder alone.
 """
 
 from __future__ import annotations
 
-import html
 import json
 from pathlib import Path
 
 import numpy as np
 
+from .report_html import render_index
 from .table1 import ROWS, scenario_key
+from .viz_frames import euler_from_quat
 
 
 def _plt():
@@ -24,13 +26,6 @@ def _plt():
     import matplotlib.pyplot as plt
 
     return plt
-
-
-def _quat_to_roll_pitch(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1, 1))
-    return roll, pitch
 
 
 def _save_trace(plt, out_dir: Path, fname: str, t, series, *, ylabel: str, title: str,
@@ -51,8 +46,9 @@ def _save_trace(plt, out_dir: Path, fname: str, t, series, *, ylabel: str, title
     return fname
 
 
-def trace_plots(log, name: str, out_dir: Path, windows) -> list[str]:
-    """Attitude error, PWM and yaw-rate traces of one run; returns file names."""
+def trace_plots(log, name: str, out_dir: Path, windows, who: str = "run 0"
+                ) -> list[tuple[str, str]]:
+    """Attitude error, PWM and yaw-rate traces of one run: [(file name, caption)]."""
     plt = _plt()
     files = []
     ch = log.channels
@@ -60,37 +56,52 @@ def trace_plots(log, name: str, out_dir: Path, windows) -> list[str]:
     gt = ch.get("/gt_att")
     if st is not None and gt is not None and len(st) and len(gt):
         idx = np.clip(np.searchsorted(gt["sim_ns"], st["sim_ns"]), 0, len(gt) - 1)
-        roll, pitch = _quat_to_roll_pitch(gt["q_wxyz"][idx])
+        euler = euler_from_quat(gt["q_wxyz"][idx])
+        roll, pitch = euler[:, 0], euler[:, 1]
         tgt = st["att_target_rad"]
         err = np.degrees(np.hypot(roll - tgt[:, 0], pitch - tgt[:, 1]))
-        files.append(_save_trace(
-            plt, out_dir, f"{name}_attitude_error.png", st["sim_ns"] / 1e9, [(err, None)],
+        files.append((_save_trace(
+            plt, out_dir, f"{_stem(name)}_attitude_error.png", st["sim_ns"] / 1e9, [(err, None)],
             ylabel="attitude error [deg]", span=windows[2], span_label="analysis window",
-            title=f"{name}: roll/pitch error vs commanded (shaped) target, run 0"))
+            title=f"{name}: roll/pitch error vs commanded (shaped) target, {who}"),
+            f"{name}, {who}: combined roll/pitch error of the true attitude against the "
+            "commanded target (the FC's shaped target) at each PWM tick; shaded: the "
+            "analysis window of the RMS and P95 figures."))
     pwm = ch.get("/pwm")
     if pwm is not None and len(pwm):
         us = pwm["pwm_us"]
-        files.append(_save_trace(
-            plt, out_dir, f"{name}_pwm.png", pwm["sim_ns"] / 1e9,
+        files.append((_save_trace(
+            plt, out_dir, f"{_stem(name)}_pwm.png", pwm["sim_ns"] / 1e9,
             [(us[:, m], f"motor {m + 1}") for m in range(4)], ylabel="PWM [us]",
-            title=f"{name}: motor PWM, run 0", legend_cols=4))
+            title=f"{name}: motor PWM, {who}", legend_cols=4),
+            f"{name}, {who}: the PWM of the four motors as the FC published it "
+            "(ArduCopter motor order); its spread over the analysis window is p-p."))
     if gt is not None and len(gt):
-        files.append(_save_trace(
-            plt, out_dir, f"{name}_yaw_rate.png", gt["sim_ns"] / 1e9,
+        files.append((_save_trace(
+            plt, out_dir, f"{_stem(name)}_yaw_rate.png", gt["sim_ns"] / 1e9,
             [(gt["rates_frd_rad_s"][:, 2], None)], ylabel="yaw rate [rad/s]",
             span=windows[3], span_label="yaw window",
-            title=f"{name}: true body yaw rate, run 0"))
+            title=f"{name}: true body yaw rate, {who}"),
+            f"{name}, {who}: the true body yaw rate (ground truth); shaded: the yaw "
+            "window of the yaw-rate figure."))
     return files
 
 
-def box_plots(results, out_dir: Path) -> list[str]:
+def _stem(name: str) -> str:
+    return name.replace(" ", "_")
+
+
+def box_plots(results, out_dir: Path) -> list[tuple[str, str]]:
     plt = _plt()
     files = []
-    names = sorted({scenario_key(r.spec.scenario) for r in results})
+    def group(r) -> str:    # one box per scenario and controller
+        fc = getattr(r.spec, "fc", "ours")
+        return scenario_key(r.spec.scenario) + ("" if fc == "ours" else f" {fc}")
+    names = sorted({group(r) for r in results})
     for key, label, unit, _fmt in ROWS:
         data = []
         for n in names:
-            vals = [r.metrics.get(key) for r in results if scenario_key(r.spec.scenario) == n]
+            vals = [r.metrics.get(key) for r in results if group(r) == n]
             data.append([v for v in vals if v is not None and np.isfinite(v)])
         if not any(data):
             continue
@@ -99,8 +110,11 @@ def box_plots(results, out_dir: Path) -> list[str]:
         ax.set_ylabel(f"{label} [{unit}]")
         ax.set_title(f"{label} per scenario ({len(results) // max(len(names), 1)} runs each)")
         fig.tight_layout()
-        files.append(f"box_{key}.png")
-        fig.savefig(out_dir / files[-1], dpi=110)
+        files.append((f"box_{key}.png",
+                       f"{label} [{unit}] of every run, per scenario and controller (box: "
+                       "quartiles and median; whiskers: 1.5 interquartile ranges; circles: "
+                       "outliers)."))
+        fig.savefig(out_dir / files[-1][0], dpi=110)
         plt.close(fig)
     return files
 
@@ -112,26 +126,28 @@ def write_report(results, table_md: str, table_json: dict, out_dir: Path, *,
 
     rep = out_dir / "report"
     rep.mkdir(parents=True, exist_ok=True)
-    images = []
+    figures = []
     seen = set()
+    first_meta = None
+    described = {}
     for r in results:
         name = scenario_key(r.spec.scenario)
-        if name in seen or not Path(r.spec.log_path).exists():   # --keep-logs none
+        fc = getattr(r.spec, "fc", "ours")
+        if (name, fc) in seen or not Path(r.spec.log_path).exists():   # --keep-logs none
             continue
-        seen.add(name)
+        seen.add((name, fc))
         log = read_log(r.spec.log_path)
-        images += trace_plots(log, name, rep, r.spec.windows)
-    images += box_plots(results, rep)
+        first_meta = first_meta or log.metadata
+        sc = log.metadata.get("scenario") or {}
+        described.setdefault(name, sc.get("description", ""))
+        label = name if fc == "ours" else f"{name} {fc}"
+        figures += trace_plots(log, label, rep, r.spec.windows,
+                               who=f"run {r.spec.run_index} (seed {r.spec.seed})")
+    figures += box_plots(results, rep)
     (rep / "table1.md").write_text(table_md + "\n")
     (rep / "table1.json").write_text(json.dumps(table_json, indent=2) + "\n")
-    parts = ["<!doctype html><meta charset='utf-8'><title>silbridge benchmark</title>",
-             "<h1>silbridge benchmark</h1>", "<h2>Table 1</h2>",
-             f"<pre>{html.escape(table_md)}</pre>"]
-    for title, body in extra_sections:
-        parts.append(f"<h2>{html.escape(title)}</h2><pre>{html.escape(body)}</pre>")
-    parts.append("<h2>Plots</h2>")
-    for img in images:
-        parts.append(f"<figure><img src='{img}'><figcaption>{img}</figcaption></figure>")
     index = rep / "index.html"
-    index.write_text("\n".join(parts) + "\n")
+    index.write_text(render_index(table=table_json, results=results, figures=figures,
+                                  rep_dir=rep, log_meta=first_meta, scenarios=described,
+                                  extra_sections=extra_sections))
     return index

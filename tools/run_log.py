@@ -20,8 +20,11 @@ class RunLogSink:
     """Loop hooks -> one LogWriter. Over shared memory the FC's C poll appends the
     records itself (capture_fc); measure the cost with `python -m silbridge.tools.log_bench`."""
 
-    def __init__(self, path, *, metadata: dict, fc_logs_pwm: bool = False):
-        self.writer = LogWriter(path, metadata=metadata)
+    def __init__(self, path, *, metadata: dict, fc_logs_pwm: bool = False, live=None,
+                 **writer_kw):
+        self.writer = LogWriter(path, metadata=metadata, live=live, **writer_kw)
+        self.live = live            # a tools.live_view.LiveView, closed with the sink
+        self._cycles = 0
         self.writer.declare(TIMING_CHANNEL, TIMING_DTYPE)
         # With the FC in its own process the bridge's PWM never reaches this
         # writer: the FC then logs the PWM it published (fc_logs_pwm).
@@ -53,6 +56,11 @@ class RunLogSink:
         timing is the /timing row (sim_ns, imu_wall_ns, consume_wall_ns, pwm_wall_ns,
         loop_period_ns)."""
         self.writer.write_cycle(recs, status, timing, pwm if self._fc_logs_pwm else None)
+        if self.live is not None:   # a live view: cut partial batches now and then
+            self._cycles += 1
+            if self._cycles >= LogWriter.CAPTURE_CHECK_TICKS:
+                self._cycles = 0
+                self.writer.capture_flush()
 
     # -- bridge side ----------------------------------------------------------
     # pwm_records(pwm): the PWM records the bridge received (bound in __init__; None
@@ -65,4 +73,28 @@ class RunLogSink:
         if self._unbind is not None:    # the core must not append to a closed log
             self._unbind()
             self._unbind = None
-        self.writer.close(**summary)
+        try:
+            self.writer.close(**summary)
+        finally:
+            if self.live is not None:
+                self.live.close()
+                self.live = None
+
+
+def open_run_sink(path, metadata: dict, *, viz_hz: float | None = None, live: str | None = None,
+                  out=print) -> RunLogSink:
+    """The sink of `fly`/`fc`: the log at `path` (None: no file, a live view only), its
+    viewable channels at viz_hz (None: the default), a live view on `live` (HOST:PORT,
+    '' for the default address, None for none), announced through out()."""
+    view = None
+    if live is not None:
+        from .live_view import LiveView, parse_address
+        view = LiveView(*parse_address(live))
+        out(f"live view: {view.url} (Foxglove: Open connection -> Foxglove WebSocket)")
+    kw = {} if viz_hz is None else {"viz_hz": viz_hz}
+    try:
+        return RunLogSink(path, metadata=metadata, fc_logs_pwm=True, live=view, **kw)
+    except BaseException:
+        if view is not None:
+            view.close()
+        raise
