@@ -187,6 +187,9 @@ class KinematicVehicle:
         self._record("mission_updated", items)
         self.mission_items = items
 
+    def geo_updated(self, mission_type, items):
+        self._record("geo_updated", mission_type, items)
+
     def set_position_target(self, target):
         self._record("set_position_target", target)
 

@@ -122,7 +122,7 @@ def test_request_message_and_home(env):
     home = c.wait("HOME_POSITION")
     assert (home.latitude, home.longitude) == (-353632621, 1491652374)
     ack = c.command_long(mav.MAV_CMD_REQUEST_MESSAGE, p1=60000)
-    assert ack.result == mav.MAV_RESULT_UNSUPPORTED
+    assert ack.result == mav.MAV_RESULT_FAILED          # ArduCopter 4.6 for an unknown id
 
 
 def test_ack_within_half_a_second_even_when_vehicle_stalls(env):
