@@ -11,7 +11,8 @@ breached", "Polygon fence breached", NOTICE) and, armed and with FENCE_ACTION se
 Copter::fence_check does: on the ground -> disarm; more than 100 m outside -> LAND; else
 1 RTL (LAND if RTL refuses), 2 LAND, 3 RTL or LAND (no SmartRTL here), 4 BRAKE or LAND,
 5 LAND. As in AC_Fence, the altitude and circle fences then move 20 m out (a "backup fence")
-so a vehicle that keeps going triggers again, and a mode change while breached (the action's
+so a vehicle that keeps going triggers again (a breach clears once 1 m back inside, so noise
+on the line does not flap it), and a mode change while breached (the action's
 own, or the pilot's) starts a 10 s manual recovery during which breaches are recorded but not
 acted on ("Manual recovery started"). When every breach clears: "Fence breach cleared".
 
@@ -34,6 +35,7 @@ ALT_MAX, CIRCLE, POLYGON, ALT_MIN = 1, 2, 4, 8
 BACKUP_M = 20.0                 # AC_FENCE_*_BACKUP_DISTANCE (copter)
 GIVE_UP_M = 100.0               # AC_FENCE_GIVE_UP_DISTANCE: farther out, just land
 RECOVERY_S = 10.0               # AC_FENCE_MANUAL_RECOVERY_TIME_MIN
+CLEAR_M = 1.0                   # ours: a breach clears 1 m inside (no flapping on estimate noise)
 NAMES = ((ALT_MAX, "Max Alt"), (ALT_MIN, "Min Alt"), (CIRCLE, "Circle"), (POLYGON, "Polygon"))
 NOTICE, INFO = mav.MAV_SEVERITY_NOTICE, mav.MAV_SEVERITY_INFO
 _NS = 1_000_000_000
@@ -219,6 +221,8 @@ class Geofence:
     def _limit(self, kind: int, value: float, limit: float, above: bool) -> int:
         """1 new breach (or backup fence crossed), 0 otherwise; keeps the breach bit."""
         out = value >= limit if above else value <= limit
+        if not out and self.breaches & kind and abs(value - limit) < CLEAR_M:
+            return 0            # hovering on the line: not cleared yet
         if not out:
             self.breaches &= ~kind
             self._backup[kind] = 0.0

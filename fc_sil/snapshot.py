@@ -136,7 +136,9 @@ def _landed_state(v) -> int:
 
 def build_snapshot(v) -> VehicleSnapshot:
     st = v.status
-    present, enabled, health = _sensor_bits(v) if st is not None else (0, 0, 0)
+    # before the first core status: nothing present, and the geofence "healthy" as ArduCopter
+    # reports an absent fence (MAVProxy says "fence breach" when that bit goes from 1 to 0)
+    present, enabled, health = _sensor_bits(v) if st is not None else (0, 0, SensorBit.GEOFENCE)
     est = v.est
     lat_e7, lon_e7 = est.latlon_e7()
     alt_msl_m = v.home_alt_msl_m + v.alt_m

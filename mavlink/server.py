@@ -30,7 +30,7 @@ from typing import Callable, Sequence
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from . import commands as cmds
-from . import ftp, setpoints
+from . import ftp, setpoints, stream_params
 from .endpoints import Endpoint, parse_endpoint, parse_endpoints
 from .errors import ParamFileError
 from .link import Link, TcpListener, open_endpoint
@@ -97,11 +97,13 @@ class GcsServer:
         self._links: list[Link] = []
         self._listeners: list[TcpListener] = []
         self._schedules: dict[Link, StreamSchedule] = {}
+        self._endpoint_of: dict = {}        # link or listener -> endpoint number (SRn_*)
         self._closed_totals: collections.Counter = collections.Counter()
         now = time.monotonic()
         try:
-            for ep in eps:
+            for n, ep in enumerate(eps):
                 opened = open_endpoint(ep, sysid, compid)
+                self._endpoint_of[opened] = n
                 if isinstance(opened, TcpListener):
                     self._listeners.append(opened)
                 else:
@@ -256,6 +258,7 @@ class GcsServer:
             elif isinstance(r, TcpListener):
                 client = r.accept()
                 if client is not None:
+                    self._endpoint_of[client] = self._endpoint_of.get(r, -1)
                     self._add_link(client, now)
             else:
                 for msg in r.receive():
@@ -291,7 +294,9 @@ class GcsServer:
     # -- links ---------------------------------------------------------------------------------------
     def _add_link(self, link: Link, now: float) -> None:
         self._links.append(link)
-        self._schedules[link] = StreamSchedule(now)
+        sched = StreamSchedule(now)
+        stream_params.apply_stored(self.params, self._endpoint_of.get(link, -1), sched, now)
+        self._schedules[link] = sched
 
     def _reap_links(self) -> None:
         for link in [l for l in self._links if l.closed]:
@@ -302,6 +307,7 @@ class GcsServer:
             self._links.remove(link)
             self._schedules.pop(link, None)
             self._home_sent.pop(link, None)
+            self._endpoint_of.pop(link, None)
 
     def _close_sockets(self) -> None:
         if self._closed:
@@ -403,9 +409,16 @@ class GcsServer:
         self._run_plan(link, req, key, plan, now)
 
     def _on_request_data_stream(self, link, msg, now):
-        if self._for_us(msg.target_system, msg.target_component):
-            self._schedules[link].request_data_stream(msg.req_stream_id, msg.req_message_rate,
-                                                      msg.start_stop != 0, now)
+        if not self._for_us(msg.target_system, msg.target_component):
+            return
+        start = msg.start_stop != 0
+        if start and msg.req_message_rate <= 0:
+            return          # ArduCopter ignores a start without a rate
+        self._schedules[link].request_data_stream(msg.req_stream_id, msg.req_message_rate,
+                                                  start, now)
+        for name in stream_params.remember(self.params, self._endpoint_of.get(link, -1),
+                                           msg.req_stream_id, msg.req_message_rate, start):
+            self._param_changed(name)
 
     def _on_timesync(self, link, msg, now):
         if msg.tc1 == 0:    # a request; answer with our clock in ns, echo theirs
