@@ -24,6 +24,7 @@ class Gcs:
         self.texts: list[tuple[float, int, str]] = []
         self.hb = None
         self.last: dict[str, object] = {}
+        self.seen_at: dict[str, list[float]] = {}   # every message type: when each arrived
         self.breach_types: set[int] = set()      # FENCE_STATUS.breach_type seen while breached
         self.fence_unhealthy = False             # SYS_STATUS geofence present but unhealthy
         self._next_hb = 0.0
@@ -40,6 +41,7 @@ class Gcs:
     def _take(self, x) -> None:
         t = x.get_type()
         self.last[t] = x
+        self.seen_at.setdefault(t, []).append(time.monotonic())
         if t == "STATUSTEXT":
             self.texts.append((time.monotonic(), x.severity, x.text))
         elif t == "HEARTBEAT" and x.get_srcComponent() == 1 and x.get_srcSystem() == 1:
@@ -78,6 +80,16 @@ class Gcs:
                 self._take(x)
                 out.append(x)
         return out
+
+    def count_since(self, mtype: str, since: float) -> int:
+        return sum(1 for t in self.seen_at.get(mtype, ()) if t >= since)
+
+    def wait_seen(self, mtype: str, since: float, timeout_s: float) -> bool:
+        """True once a message of mtype has arrived at or after `since` (already or later)."""
+        end = time.monotonic() + timeout_s
+        while self.count_since(mtype, since) == 0 and time.monotonic() < end:
+            self.pump(0.1)
+        return self.count_since(mtype, since) > 0
 
     def text_seen(self, needle: str, since: float = 0.0) -> bool:
         return any(needle in t for ts, _, t in self.texts if ts >= since)
