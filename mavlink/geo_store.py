@@ -144,8 +144,9 @@ class GeoStore:
         if result != mav.MAV_MISSION_ACCEPTED:
             return result
         with self._lock:
+            # read back as ArduCopter returns them: current 0, autocontinue 0
             self._items = tuple(dataclasses.replace(it, mission_type=self.mission_type,
-                                                    current=0) for it in items)
+                                                    current=0, autocontinue=0) for it in items)
         return mav.MAV_MISSION_ACCEPTED
 
     def clear(self) -> None:
