@@ -131,12 +131,21 @@ class Guided(Mode):
         self.target = ("pos", tuple(ne), alt_m)
         v.start_track(ne, alt_m, speed_m_s)
 
+    def _end_takeoff(self, v) -> None:
+        """A velocity or attitude target during the take-off ends it where it got to (as
+        ArduCopter: climb 0 then holds the height reached, not the pre-take-off 0 m)."""
+        if self.target is not None and self.target[0] == "takeoff":
+            v.takeoff_in_progress = False
+            v.alt_hold_m = v.alt_m
+
     def set_velocity(self, v, vel_ne, climb_m_s: float) -> None:
+        self._end_takeoff(v)
         deadline = v.sim_ns + int(v.cfg.guid_timeout_s * 1e9)
         self.target = ("vel", tuple(vel_ne), climb_m_s, deadline)
 
     def set_attitude(self, v, roll_rad: float, pitch_rad: float, yaw_rad: float,
                      climb_m_s: float) -> None:
+        self._end_takeoff(v)
         deadline = v.sim_ns + int(v.cfg.guid_timeout_s * 1e9)
         self.target = ("att", roll_rad, pitch_rad, yaw_rad, climb_m_s, deadline)
 
