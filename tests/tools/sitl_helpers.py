@@ -92,8 +92,10 @@ class SitlVehicle:
         """True once the bridge reports its last start-up check passed."""
         end = time.monotonic() + timeout_s
         while time.monotonic() < end:
-            if any(line.startswith("check drops") for line in self.out_lines + self.err_lines):
-                return True
+            lines = self.out_lines + self.err_lines
+            if any(line.startswith("check drops") for line in lines):
+                # all check lines are printed before the verdict: a failed one ends the run
+                return not any(line.startswith("check ") and "FAILED" in line for line in lines)
             if self.proc.poll() is not None:
                 return False
             time.sleep(0.05)
