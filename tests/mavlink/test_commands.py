@@ -116,6 +116,8 @@ def test_request_message_and_home(env):
                 mav.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET):
         assert av.capabilities & bit
     assert not av.capabilities & mav.MAV_PROTOCOL_CAPABILITY_FTP
+    assert av.capabilities & mav.MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
+    assert av.capabilities & mav.MAV_PROTOCOL_CAPABILITY_MISSION_RALLY
     assert bytes(av.flight_custom_version) == b"deadbeef"
     ack = c.command_long(mav.MAV_CMD_GET_HOME_POSITION)
     assert ack.result == mav.MAV_RESULT_ACCEPTED
