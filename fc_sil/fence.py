@@ -6,7 +6,7 @@ mavlink/geo_store.py), 8 min altitude (FENCE_ALT_MIN). The vehicle must stay ins
 inclusion shape (inside any one of them with FENCE_OPTIONS bit 1) and outside every exclusion.
 
 Checked every outer-loop step, armed or not (a breach on the ground fails the pre-arm check
-"vehicle outside fence"). A new breach is announced ("Max Alt fence breached", "Circle fence
+"Vehicle breaching Polygon fence"). Armed, a new breach is announced ("Max Alt fence breached", "Circle fence
 breached", "Polygon fence breached", NOTICE) and, armed and with FENCE_ACTION set, acted on as
 Copter::fence_check does: on the ground -> disarm; more than 100 m outside -> LAND; else
 1 RTL (LAND if RTL refuses), 2 LAND, 3 RTL or LAND (no SmartRTL here), 4 BRAKE or LAND,
@@ -159,13 +159,14 @@ class Geofence:
             if c.radius < 0:
                 return "PreArm: Invalid FENCE_RADIUS value"
             if c.radius < c.margin:
-                return "PreArm: FENCE_MARGIN is less than FENCE_RADIUS"
+                return "PreArm: Circle FENCE_MARGIN is less than FENCE_RADIUS"
         if c.alt_max < 0.0:
             return "PreArm: Invalid FENCE_ALT_MAX value"
         if c.alt_min < -100.0:
             return "PreArm: Invalid FENCE_ALT_MIN value"
         if self.breaches:
-            return "PreArm: vehicle outside fence"
+            name = next(n for bit, n in NAMES if self.breaches & bit)
+            return f"PreArm: Vehicle breaching {name} fence"
         if c.margin < 0.0:
             return "PreArm: Invalid FENCE_MARGIN value"
         if c.alt_max < c.alt_min:
@@ -272,7 +273,8 @@ class Geofence:
             self._record(v, new)
         elif before and not self.breaches:
             self.breach_type = mav.FENCE_BREACH_NONE
-            v.statustext(NOTICE, "Fence breach cleared")
+            if v.armed:
+                v.statustext(NOTICE, "Fence breach cleared")
 
     def _record(self, v, new: int) -> None:
         self.breaches |= new
@@ -281,10 +283,12 @@ class Geofence:
         self.breach_type = (mav.FENCE_BREACH_MAXALT if new & ALT_MAX
                             else mav.FENCE_BREACH_MINALT if new & ALT_MIN
                             else mav.FENCE_BREACH_BOUNDARY)
+        if not v.armed:
+            return          # recorded (pre-arm check, FENCE_STATUS), announced only when armed
         for bit, name in NAMES:
             if new & bit:
                 v.statustext(NOTICE, f"{name} fence breached")
-        if not v.armed or self.cfg.action == 0:
+        if self.cfg.action == 0:
             return
         if self._recovery_until_ns is not None and v.sim_ns < self._recovery_until_ns:
             return      # the pilot (or a previous action) is recovering

@@ -587,6 +587,8 @@ class GcsServer:
                 self.params.set("RALLY_TOTAL", float(len(items)))
             except KeyError:
                 pass
+        else:   # ArduCopter 4.6 after every fence upload or clear (debug severity)
+            self.statustext(mav.MAV_SEVERITY_DEBUG, "Fence Indexed OK")
         self._submit_setpoint("geo_updated", (mission_type, items))
 
     def _mission_set_current_msg(self, link, msg, seq: int) -> None:

@@ -7,7 +7,9 @@ fence pre-arm check, on silbridge and (SILBRIDGE_ARDUCOPTER set) the real ArduCo
   fence leaves the rally points;
 * HOME_POSITION: not streamed unasked (ArduCopter sends it when home is set and at arming, and
   on request), once on GET_HOME_POSITION, once more when arming fixes home;
-* pre-arm: FENCE_ENABLE 1 with only the polygon type and no fence uploaded refuses to arm.
+* pre-arm: FENCE_ENABLE 1 with only the polygon type and no fence uploaded refuses to arm, and
+  so does a vehicle inside an exclusion circle ("Vehicle breaching Polygon fence"; a breach
+  while disarmed is not announced).
 """
 
 from __future__ import annotations
@@ -121,6 +123,20 @@ def test_home_position_on_request_and_at_arming_and_fence_prearm(kind, tmp_path)
         assert ack is not None and ack.result != mav.MAV_RESULT_ACCEPTED
         g.pump(1.0)
         assert g.text_seen("Fences enabled, but none selected", t0), g.texts[-5:]
+
+        # an exclusion circle around the vehicle: it is breaching the fence, no arming
+        pos = g.last["GLOBAL_POSITION_INT"]
+        ack = g.upload(FENCE, [dict(frame=G_INT, command=mav.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION,
+                                    p1=20.0, x=pos.lat, y=pos.lon)])
+        assert ack is not None and ack.type == mav.MAV_MISSION_ACCEPTED
+        g.pump(1.0)
+        t0 = time.monotonic()
+        ack = g.command(mav.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+        assert ack is not None and ack.result != mav.MAV_RESULT_ACCEPTED
+        g.pump(1.0)
+        assert g.text_seen("Vehicle breaching Polygon fence", t0), g.texts[-5:]
+        assert not any("fence breached" in t for _, _, t in g.texts), "announced while disarmed"
+        assert g.clear(FENCE).type == mav.MAV_MISSION_ACCEPTED
         assert g.set_param("FENCE_ENABLE", 0) == 0
 
         t0 = time.monotonic()
