@@ -131,12 +131,21 @@ class Guided(Mode):
         self.target = ("pos", tuple(ne), alt_m)
         v.start_track(ne, alt_m, speed_m_s)
 
+    def _end_takeoff(self, v) -> None:
+        """A velocity or attitude target during the take-off ends it where it got to (as
+        ArduCopter: climb 0 then holds the height reached, not the pre-take-off 0 m)."""
+        if self.target is not None and self.target[0] == "takeoff":
+            v.takeoff_in_progress = False
+            v.alt_hold_m = v.alt_m
+
     def set_velocity(self, v, vel_ne, climb_m_s: float) -> None:
+        self._end_takeoff(v)
         deadline = v.sim_ns + int(v.cfg.guid_timeout_s * 1e9)
         self.target = ("vel", tuple(vel_ne), climb_m_s, deadline)
 
     def set_attitude(self, v, roll_rad: float, pitch_rad: float, yaw_rad: float,
                      climb_m_s: float) -> None:
+        self._end_takeoff(v)
         deadline = v.sim_ns + int(v.cfg.guid_timeout_s * 1e9)
         self.target = ("att", roll_rad, pitch_rad, yaw_rad, climb_m_s, deadline)
 
@@ -233,9 +242,18 @@ class RtlSequence:
 
     def __init__(self, v):
         cfg = v.cfg
+        # home, or the nearest rally point (fc_sil/rally.py)
+        target = v.rally.rtl_destination(v)
+        self.dest_ne = target.ne
+        self.rally_index = target.rally_index
         self.return_alt_m = max(v.alt_m + cfg.rtl_climb_min_m, cfg.rtl_alt_m)
-        home_dist = math.hypot(*v.est.pos_ne_m) if v.home_ne is None else \
-            math.hypot(v.est.pos_ne_m[0] - v.home_ne[0], v.est.pos_ne_m[1] - v.home_ne[1])
+        if target.alt_m is not None:
+            self.return_alt_m = max(self.return_alt_m, target.alt_m)
+        safe_max = v.fence.safe_alt_max(v)
+        if safe_max is not None:      # ArduCopter: RTL stays below an enabled max-alt fence
+            self.return_alt_m = min(self.return_alt_m, safe_max)
+        home_dist = math.hypot(v.est.pos_ne_m[0] - self.dest_ne[0],
+                               v.est.pos_ne_m[1] - self.dest_ne[1])
         if home_dist < cfg.wp.radius_m:
             # already over home: ArduCopter does not climb then
             self.return_alt_m = max(v.alt_m, cfg.rtl_alt_final_m, 0.0)
@@ -249,7 +267,7 @@ class RtlSequence:
         if self.phase == "climb":
             if v.fly_track(dt_s):
                 speed = cfg.rtl_speed_m_s or None
-                v.start_track(v.home_ne, self.return_alt_m, speed)
+                v.start_track(self.dest_ne, self.return_alt_m, speed)
                 self.phase = "return"
                 v.face_track(rtl=True)
         elif self.phase == "return":
@@ -258,10 +276,10 @@ class RtlSequence:
                 self.loiter_until_ns = v.sim_ns + int(cfg.rtl_loit_time_s * 1e9)
         elif self.phase == "loiter":
             v.command_vertical(dt_s, self.return_alt_m)
-            v.hold_position(dt_s, v.home_ne, (0.0, 0.0), cfg.wp.speed_m_s)
+            v.hold_position(dt_s, self.dest_ne, (0.0, 0.0), cfg.wp.speed_m_s)
             if v.sim_ns >= self.loiter_until_ns:
                 if cfg.rtl_alt_final_m > 0.0:
-                    v.start_track(v.home_ne, cfg.rtl_alt_final_m, None)
+                    v.start_track(self.dest_ne, cfg.rtl_alt_final_m, None)
                     self.phase = "final"
                 else:
                     self.phase = "land"
@@ -270,10 +288,10 @@ class RtlSequence:
                 self.phase = "hover"
         elif self.phase == "hover":
             v.command_vertical(dt_s, cfg.rtl_alt_final_m)
-            v.hold_position(dt_s, v.home_ne, (0.0, 0.0), cfg.wp.speed_m_s)
+            v.hold_position(dt_s, self.dest_ne, (0.0, 0.0), cfg.wp.speed_m_s)
             self.done = True
         elif self.phase == "land":
-            v.hold_position(dt_s, v.home_ne, (0.0, 0.0), cfg.wp.speed_m_s)
+            v.hold_position(dt_s, self.dest_ne, (0.0, 0.0), cfg.wp.speed_m_s)
             if v.land_descent(dt_s):
                 self.phase = "landed"
                 self.done = True

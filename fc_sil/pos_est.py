@@ -93,6 +93,8 @@ class PositionEstimator:
         self.acc_bias_ne_m_s2 = [0.0, 0.0]
         self.acc_ned_m_s2 = (0.0, 0.0, 0.0)
         self.valid = False                # a 3D fix has been fused
+        self.innov_pos_m = 0.0            # size of the last GNSS innovation
+        self.innov_vel_m_s = 0.0
         self.last_fix_sim_ns: int | None = None
         self.last_fused_ns: int | None = None
         self.fixes_fused = 0
@@ -153,6 +155,8 @@ class PositionEstimator:
         self.last_fused_ns = t
         e_p = (mn - past[0], me - past[1])
         e_v = (mvn - past[2], mve - past[3])
+        self.innov_pos_m = math.hypot(*e_p)         # EKF_STATUS_REPORT's test ratios
+        self.innov_vel_m_s = math.hypot(*e_v)
         kp = min(1.0, dt_fix / self.pos_tc_s)
         kv = min(1.0, dt_fix / self.vel_tc_s)
         # bias learns ~10x slower than the velocity correction (keeps the loop well damped)

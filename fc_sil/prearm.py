@@ -12,6 +12,7 @@ for SYS_STATUS's PREARM_CHECK health bit, which MAVSDK reads as "armable".
                     need it no higher than the centre dead zone (else it would climb at once)
   mode            : RTL, LAND, AUTO and BRAKE cannot be armed in (as ArduCopter by default)
   battery         : no battery failsafe active
+  fence           : the geofence's own checks (fence.py), worded as AC_Fence's
 """
 
 from __future__ import annotations
@@ -40,6 +41,9 @@ def prearm_failure(v) -> str | None:
         return "PreArm: AHRS not converged"
     if v.mode.requires_position and not v.position_ok():
         return "PreArm: Need 3D Fix"
+    fence = v.fence.prearm_failure(v)
+    if fence:
+        return fence
     if not v.mode.armable:
         return f"Arm: Mode {v.mode.name} not armable"
     thr = v.pilot_throttle_stick()

@@ -66,7 +66,40 @@ def _sensor_bits(v) -> tuple[int, int, int]:
         health &= ~SensorBit.AHRS
     if not v.armed and prearm_failure(v) is not None:
         health &= ~SensorBit.PREARM_CHECK
+    f_present, f_enabled, f_healthy = v.fence.sys_status(v)
+    if f_present:
+        present |= SensorBit.GEOFENCE
+    if f_enabled:
+        enabled |= SensorBit.GEOFENCE
+    if f_healthy:       # ArduCopter: healthy unless present and breached (absent: healthy)
+        health |= SensorBit.GEOFENCE
     return present, enabled, health
+
+
+# EKF_STATUS_REPORT: our estimator's state as EKF_* flags, and the GNSS innovations divided by
+# gates as ArduPilot's normalised test ratios (GNSS position 5 m, velocity 1 m/s, altitude
+# 10 m; below 1 = consistent).
+_GATE_POS_M, _GATE_VEL_M_S, _GATE_ALT_M = 5.0, 1.0, 10.0
+
+
+def _ekf_fields(v) -> dict:
+    flags = 0
+    if v.imu_run_s >= 1.0 and v.trust >= 0.5:
+        flags |= mav.EKF_ATTITUDE | mav.EKF_VELOCITY_VERT | mav.EKF_POS_VERT_ABS
+        if v.position_ok():
+            flags |= (mav.EKF_VELOCITY_HORIZ | mav.EKF_POS_HORIZ_REL | mav.EKF_POS_HORIZ_ABS
+                      | mav.EKF_PRED_POS_HORIZ_REL | mav.EKF_PRED_POS_HORIZ_ABS)
+        else:
+            flags |= mav.EKF_CONST_POS_MODE
+    else:
+        flags = mav.EKF_UNINITIALIZED
+    alt_err = 0.0
+    g = v.gnss
+    if g is not None and g["fix_type"] >= 3 and v.home_set:
+        alt_err = abs(g["alt_mm"] * 1e-3 - (v.home_alt_msl_m + v.alt_m))
+    est = v.est
+    return dict(ekf_flags=flags, ekf_vel_var=est.innov_vel_m_s / _GATE_VEL_M_S,
+                ekf_pos_h_var=est.innov_pos_m / _GATE_POS_M, ekf_pos_v_var=alt_err / _GATE_ALT_M)
 
 
 def _pid_rows(v, st) -> tuple[PidTuningRow, ...]:
@@ -103,7 +136,9 @@ def _landed_state(v) -> int:
 
 def build_snapshot(v) -> VehicleSnapshot:
     st = v.status
-    present, enabled, health = _sensor_bits(v) if st is not None else (0, 0, 0)
+    # before the first core status: nothing present, and the geofence "healthy" as ArduCopter
+    # reports an absent fence (MAVProxy says "fence breach" when that bit goes from 1 to 0)
+    present, enabled, health = _sensor_bits(v) if st is not None else (0, 0, SensorBit.GEOFENCE)
     est = v.est
     lat_e7, lon_e7 = est.latlon_e7()
     alt_msl_m = v.home_alt_msl_m + v.alt_m
@@ -146,7 +181,8 @@ def build_snapshot(v) -> VehicleSnapshot:
         alt_rel_mm=int(v.alt_m * 1000.0), vel_ned_m_s=(vn, ve, vd),
         pos_ned_m=(est.pos_ne_m[0], est.pos_ne_m[1], -(v.alt_m + origin_up)),
         home_set=v.home_set, home_lat_e7=v.home_lat_e7, home_lon_e7=v.home_lon_e7,
-        home_alt_msl_mm=int(v.home_alt_msl_m * 1000.0),
+        home_alt_msl_mm=int(v.home_alt_msl_m * 1000.0), home_epoch=v.home_epoch,
+        home_ned_m=(v.home_ne[0], v.home_ne[1], -origin_up),
         battery_voltage_v=b.voltage_v, battery_current_a=b.current_a,
         battery_remaining_pct=b.remaining_pct, battery_consumed_mah=b.consumed_mah,
         servo_us=servo, rc_channels_us=tuple(ch),
@@ -159,7 +195,8 @@ def build_snapshot(v) -> VehicleSnapshot:
         mission_seq=v.mission.current, mission_state=v.mission.state,
         mission_mode=1 if v.mode.number == CopterMode.AUTO else 0,
         vibration_m_s2=tuple(math.sqrt(max(0.0, x)) for x in v.vibe),
-        flight_custom_version=v.custom_version, **gps)
+        flight_custom_version=v.custom_version, **gps, **_ekf_fields(v),
+        **v.fence.status_fields(v))
 
 
 def _nav_output(v, bearing_deg: int):

@@ -39,6 +39,7 @@ from silbridge.mavlink.vehicle_api import CopterMode
 from . import modes as M
 from .battery import BatteryModel
 from .failsafe import FailsafeMonitor
+from .fence import Geofence
 from .mission_exec import MissionExecutor
 from .nav_config import NavConfig
 from .nav_pos import PosController
@@ -46,6 +47,7 @@ from .nav_wp import WaypointNav
 from .param_store import CoreParamStore
 from .pilot import PilotInput
 from .pos_est import PositionEstimator
+from .rally import RallyPoints
 from .snapshot import build_snapshot
 from .vehicle_commands import GcsCommands
 from .vehicle_nav import NavHelpers
@@ -82,6 +84,11 @@ class Vehicle(NavHelpers, GcsCommands):
         self.failsafe = FailsafeMonitor()
         self.mission = MissionExecutor()
         self.pilot = PilotInput()
+        self.fence = Geofence()             # fence.py: FENCE_* and the uploaded fence
+        self.rally = RallyPoints()          # rally.py: where RTL goes
+        self.fence.configure(self.store.host)
+        self.rally.configure(self.store.host)
+        self.home_epoch = 0                 # +1 when home is announced (HOME_POSITION)
         self.messages: collections.deque = collections.deque(maxlen=200)   # (sim_ns, sev, text)
         # state read by modes, failsafes and telemetry
         self.armed = False
@@ -158,6 +165,7 @@ class Vehicle(NavHelpers, GcsCommands):
         self.battery.update(self.status["pwm_us"] if self.armed else (), dt_s)
         self.failsafe.check(self)
         self._radio_failsafe()
+        self.fence.check(self)
         self.landing = False
         if self.armed:
             self.mode.run(self, dt_s)
@@ -175,6 +183,8 @@ class Vehicle(NavHelpers, GcsCommands):
         self.wp.sp = self._wp_speeds(self.speed_override_m_s)
         self.battery.configure(self.cfg.battery, self.cfg.pwm_min_us, self.cfg.pwm_max_us)
         self.est.configure(self.cfg.pos_tc_s, self.cfg.vel_tc_s, self.cfg.gps_delay_s)
+        self.fence.configure(self.store.host)
+        self.rally.configure(self.store.host)
 
     def _read_core(self) -> None:
         st = self.core.status()
@@ -239,7 +249,11 @@ class Vehicle(NavHelpers, GcsCommands):
             d = acc[i] - self._acc_lp[i]
             self.vibe[i] += kv * (d * d - self.vibe[i])
 
-    def _set_home(self) -> None:
+    def _set_home(self, announce: bool = False) -> None:
+        """Home follows the vehicle while disarmed; like ArduCopter, a GCS is told (HOME_POSITION
+        unasked) only when home is first set and when arming fixes it."""
+        if announce or not self.home_set:
+            self.home_epoch += 1
         self.home_ne = (self.est.pos_ne_m[0], self.est.pos_ne_m[1])
         self.home_lat_e7, self.home_lon_e7 = self.est.latlon_e7()
         if self._gnss_alt_filt is not None:
@@ -294,6 +308,13 @@ class Vehicle(NavHelpers, GcsCommands):
 
     def failsafe_disarm(self) -> None:
         self._disarm(None)
+
+    def fence_disarm(self) -> None:
+        self._disarm("Disarming motors (fence breach)")
+
+    def fence_set_mode(self, number: int) -> bool:
+        """A fence action's mode change; True if the vehicle is now in that mode."""
+        return self._change_mode(number) is None
 
     def mission_item_reached(self, seq: int) -> None:
         if self.server is not None:
@@ -352,6 +373,8 @@ class Vehicle(NavHelpers, GcsCommands):
             return reason
         if new.number != self.mode.number:
             self.mode.exit(self)
+            # ArduCopter: any mode change during a breach is a manual recovery attempt
+            self.fence.manual_recovery_start(self)
         self.mode = new
         self.yaw_rate_cmd = None
         self.guided_att = None

@@ -37,7 +37,7 @@ class GcsCommands:
             if reason:
                 return FAILED, reason
         if self.est.valid:
-            self._set_home()
+            self._set_home(announce=True)
         self.reset_vertical()
         self.reset_horizontal()
         self.alt_target_m = self.alt_hold_m = 0.0
@@ -110,6 +110,8 @@ class GcsCommands:
                                  mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT) \
             else alt_m - self.home_alt_msl_m
         speed = speed_m_s if math.isfinite(speed_m_s) and speed_m_s > 0 else None
+        if self._outside_fence(ne, alt):
+            return FAILED, "Reposition: destination outside fence"
         self.mode.go_to(self, ne, alt, speed)
         if math.isfinite(yaw_deg):
             self.yaw_target_rad = math.radians(yaw_deg)
@@ -138,6 +140,23 @@ class GcsCommands:
                 save_wpl(self.mission_file, items)
             except (MissionFileError, OSError) as exc:
                 self.statustext(mav.MAV_SEVERITY_ERROR, f"Mission save failed: {exc}"[:150])
+
+    def geo_updated(self, mission_type: int, items) -> None:
+        """A new fence or rally list from the GCS (already validated by the server)."""
+        if mission_type == mav.MAV_MISSION_TYPE_FENCE:
+            self.fence.set_items(items)
+        else:
+            self.rally.set_items(items)
+        if self.mission_file:
+            from silbridge.mavlink.errors import MissionFileError
+            from silbridge.mavlink.wpl import geo_file, save_wpl
+            try:
+                save_wpl(geo_file(self.mission_file, mission_type), items)
+            except (MissionFileError, OSError) as exc:
+                self.statustext(mav.MAV_SEVERITY_ERROR, f"Fence/rally save failed: {exc}"[:150])
+
+    def _outside_fence(self, ne, alt_m: float) -> bool:
+        return not self.fence.destination_ok(self, ne, alt_m)
 
     def set_position_target(self, t) -> None:
         if self.mode.number != CopterMode.GUIDED or not self.armed or not self.airborne \
@@ -170,6 +189,9 @@ class GcsCommands:
             self.yaw_target_rad = t.yaw_rad
             self.yaw_rate_cmd = None
         if use_pos and all(map(math.isfinite, (*ne, alt))):
+            if self._outside_fence(ne, alt):
+                self.setpoints_ignored += 1     # ArduCopter: GUIDED refuses it
+                return
             self.mode.go_to(self, ne, alt)
             if mask & TYPE_MASK_YAW:
                 self.face_track(rtl=False)

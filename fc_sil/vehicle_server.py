@@ -29,7 +29,8 @@ class VehicleSetupError(Exception):
 class MavlinkOptions:
     endpoints: list = field(default_factory=list)   # mavlink.endpoints.Endpoint or URL strings
     param_file: str | None = None                   # --params FILE (.parm, saved atomically)
-    mission_file: str | None = None                 # --mission FILE (QGC WPL 110)
+    mission_file: str | None = None                 # --mission FILE (QGC WPL 110; fence and
+                                                    # rally in FILE.fence / FILE.rally)
     serve: bool = True                              # False: the vehicle without a server
     tlog: str | None = None                         # --tlog FILE: the GCS traffic (mavlink/tlog.py)
 
@@ -40,7 +41,8 @@ def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None 
     from silbridge.mavlink.mission_store import MissionStore, home_item
     from silbridge.mavlink.params_file import load_into_store
     from silbridge.mavlink.server import GcsServer
-    from silbridge.mavlink.wpl import load_wpl
+    from silbridge.mavlink.geo_store import GeoStore
+    from silbridge.mavlink.wpl import geo_file, load_wpl
 
     store = CoreParamStore(core)
     problems: list[str] = []
@@ -63,7 +65,23 @@ def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None 
         if items and missions.replace(items) != 0:
             raise VehicleSetupError(f"{opts.mission_file}: the mission holds an item this "
                                     f"vehicle cannot fly; fix the file or remove --mission")
+    geo = {t: GeoStore(t) for t in (1, 2)}     # MAV_MISSION_TYPE_FENCE, _RALLY
+    for t, gs in geo.items():
+        path = geo_file(opts.mission_file, t) if opts.mission_file else None
+        if path and os.path.exists(path):
+            try:
+                items = load_wpl(path)
+            except MissionFileError as exc:
+                raise VehicleSetupError(str(exc)) from None
+            if gs.replace(items) != 0:
+                raise VehicleSetupError(f"{path}: not a valid {gs.what.lower()} list (see "
+                                        f"docs: fence polygons need all their vertices); fix "
+                                        f"or remove the file")
     vehicle = Vehicle(core, store, sink=sink, mission_file=opts.mission_file)
+    vehicle.fence.set_items(geo[1].items())
+    vehicle.rally.set_items(geo[2].items())
+    if geo[2].count():
+        store.set("RALLY_TOTAL", float(geo[2].count()))
     vehicle.mission.set_items(missions.items() if missions.count() > 1 else (home_item(),),
                               vehicle)
     for p in problems:
@@ -78,7 +96,8 @@ def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None 
             tlog = TlogWriter(opts.tlog)
         try:
             server = GcsServer(vehicle, store, opts.endpoints or None, sysid=sysid, compid=1,
-                               param_file=opts.param_file, missions=missions)
+                               param_file=opts.param_file, missions=missions, fence=geo[1],
+                               rally=geo[2])
         except Exception:
             if tlog is not None:
                 tlog.close()

@@ -1,4 +1,4 @@
-"""The MISSION_* protocol: upload, download, clear, set current (mission type 0 only).
+"""The MISSION_* protocol: upload, download, clear, set current (mission, fence, rally).
 
 Upload: MISSION_COUNT -> we ask MISSION_REQUEST_INT(seq) for each item -> MISSION_ITEM_INT
 (or the float MISSION_ITEM) -> MISSION_ACK. Every item is checked as it arrives; the first bad
@@ -10,7 +10,10 @@ stored mission; anything else leaves the previous one untouched.
 Download: MISSION_REQUEST_LIST -> MISSION_COUNT -> the GCS asks for each item, answered in the
 form asked for (_INT or float). As ArduCopter does, item 0 comes back as the current home and
 RTL items with frame 0 and zero coordinates. A download while an upload is running is DENIED.
-Fence and rally types are not implemented: MAV_MISSION_UNSUPPORTED.
+Fence (1) and rally (2) lists travel the same way when ``geo_stores`` holds their stores
+(geo_store.py: no home slot, their own item rules, the same whole-or-nothing replacement);
+a type without a store is answered MAV_MISSION_UNSUPPORTED. MISSION_CLEAR_ALL with
+MAV_MISSION_TYPE_ALL clears all three.
 
 ``tx`` is the server's output side: send(link, msg), broadcast(msg), statustext(sev, text).
 """
@@ -24,6 +27,7 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
+from .geo_store import GeoStore
 from .mission_store import GLOBAL_FRAMES, MissionStore, check_item
 from .vehicle_api import MissionItem
 
@@ -44,8 +48,12 @@ class MissionProtocol:
                  on_updated: Callable[[tuple[MissionItem, ...]], None],
                  on_set_current: Callable[[object, object, int], None],
                  home_item: Callable[[], MissionItem | None],
-                 item_resend_s: float = 1.0, upload_timeout_s: float = 8.0):
+                 item_resend_s: float = 1.0, upload_timeout_s: float = 8.0,
+                 geo_stores: dict[int, GeoStore] | None = None,
+                 on_geo_updated: Callable[[int, tuple[MissionItem, ...]], None] | None = None):
         self.store = store
+        self.geo_stores = dict(geo_stores or {})
+        self.on_geo_updated = on_geo_updated
         self.tx = tx
         self.sysid = sysid
         self.compid = compid
@@ -71,6 +79,23 @@ class MissionProtocol:
         self.tx.send(up.link, mav.MAVLink_mission_request_int_message(
             up.partner[0], up.partner[1], seq, up.mission_type))
         up.last_request_s = now_s
+
+    def _store(self, mission_type: int):
+        """The store of a mission type, or None when that type is not served."""
+        if mission_type == mav.MAV_MISSION_TYPE_MISSION:
+            return self.store
+        return self.geo_stores.get(mission_type)
+
+    @staticmethod
+    def _what(mission_type: int) -> str:
+        return {mav.MAV_MISSION_TYPE_FENCE: "Fence",
+                mav.MAV_MISSION_TYPE_RALLY: "Rally"}.get(mission_type, "Mission")
+
+    def _updated(self, mission_type: int) -> None:
+        if mission_type == mav.MAV_MISSION_TYPE_MISSION:
+            self.on_updated(self.store.items())
+        elif self.on_geo_updated is not None:
+            self.on_geo_updated(mission_type, self.geo_stores[mission_type].items())
 
     def _fail(self, result: int, reason: str | None = None) -> None:
         up = self._upload
@@ -118,7 +143,8 @@ class MissionProtocol:
     def _count(self, link, msg, now_s: float) -> None:
         partner = self._partner(msg)
         mtype = msg.mission_type
-        if mtype != mav.MAV_MISSION_TYPE_MISSION:
+        store = self._store(mtype)
+        if store is None:
             self._ack(link, partner, mav.MAV_MISSION_UNSUPPORTED, mtype)
             return
         up = self._upload
@@ -126,18 +152,18 @@ class MissionProtocol:
             self._ack(link, partner, mav.MAV_MISSION_DENIED, mtype)   # someone else uploading
             return
         self._upload = None
-        if msg.count > self.store.capacity:
+        if msg.count > store.capacity:
             self.uploads_failed += 1
             self._ack(link, partner, mav.MAV_MISSION_NO_SPACE, mtype)
             self.tx.statustext(mav.MAV_SEVERITY_WARNING,
-                               f"Mission upload refused: {msg.count} items, room for "
-                               f"{self.store.capacity}")
+                               f"{self._what(mtype)} upload refused: {msg.count} items, room "
+                               f"for {store.capacity}")
             return
         if msg.count == 0:
-            self.store.clear()
+            store.clear()
             self.uploads_ok += 1
             self._ack(link, partner, mav.MAV_MISSION_ACCEPTED, mtype)
-            self.on_updated(self.store.items())
+            self._updated(mtype)
             return
         self._upload = _Upload(link, partner, msg.count, mtype, last_progress_s=now_s)
         self._request(self._upload, 0, now_s)
@@ -146,14 +172,15 @@ class MissionProtocol:
         up = self._upload
         if up is None or up.partner != self._partner(msg) or up.link is not link:
             return      # not part of an upload in progress: ignore, as ArduPilot does
+        what = self._what(up.mission_type)
         if msg.mission_type != up.mission_type:
             self._fail(mav.MAV_MISSION_INVALID,
-                       f"Mission upload failed: item {msg.seq} of type {msg.mission_type}")
+                       f"{what} upload failed: item {msg.seq} of type {msg.mission_type}")
             return
         expected = len(up.items)
         if msg.seq >= up.count:
             self._fail(mav.MAV_MISSION_INVALID_SEQUENCE,
-                       f"Mission upload failed: item {msg.seq} beyond count {up.count}")
+                       f"{what} upload failed: item {msg.seq} beyond count {up.count}")
             return
         if msg.seq < expected:
             return      # a repeat of an item we already have
@@ -161,10 +188,12 @@ class MissionProtocol:
             self._request(up, expected, now_s)
             return
         item, result = _to_item(msg, is_int)
+        store = self._store(up.mission_type)
         if result == mav.MAV_MISSION_ACCEPTED:
-            result = check_item(item)
+            result = (check_item(item) if store is self.store
+                      else store.check_item(item, up.items))
         if result != mav.MAV_MISSION_ACCEPTED:
-            self._fail(result, f"Mission upload failed: item {msg.seq} (command "
+            self._fail(result, f"{what} upload failed: item {msg.seq} (command "
                                f"{msg.command}, frame {msg.frame}): "
                                f"{mav.enums['MAV_MISSION_RESULT'][result].name}")
             return
@@ -174,13 +203,15 @@ class MissionProtocol:
             self._request(up, len(up.items), now_s)
             return
         self._upload = None
-        result = self.store.replace(up.items)
+        result = store.replace(up.items)
         self._ack(up.link, up.partner, result, up.mission_type)
         if result == mav.MAV_MISSION_ACCEPTED:
             self.uploads_ok += 1
-            self.on_updated(self.store.items())
+            self._updated(up.mission_type)
         else:
             self.uploads_failed += 1
+            self.tx.statustext(mav.MAV_SEVERITY_WARNING, f"{what} upload failed: "
+                               f"{mav.enums['MAV_MISSION_RESULT'][result].name}")
 
     def poll(self, now_s: float) -> float | None:
         """Resend a lost request / cancel a stalled upload; return the next deadline."""
@@ -189,7 +220,7 @@ class MissionProtocol:
             return None
         if now_s - up.last_progress_s >= self.upload_timeout_s:
             self._fail(mav.MAV_MISSION_OPERATION_CANCELLED,
-                       f"Mission upload timed out at item {len(up.items)} of {up.count}")
+                       f"{self._what(up.mission_type)} upload timed out at item {len(up.items)} of {up.count}")
             return None
         if now_s - up.last_request_s >= self.item_resend_s:
             self._request(up, len(up.items), now_s)
@@ -197,9 +228,10 @@ class MissionProtocol:
                    up.last_progress_s + self.upload_timeout_s)
 
     # -- download ---------------------------------------------------------------------------------
-    def _refused(self, link, partner, msg, types=(mav.MAV_MISSION_TYPE_MISSION,)) -> bool:
-        """ACK and refuse a download or clear of another mission type, or during an upload."""
-        if msg.mission_type not in types:
+    def _refused(self, link, partner, msg, all_ok: bool = False) -> bool:
+        """ACK and refuse a download or clear of a type not served, or during an upload."""
+        if self._store(msg.mission_type) is None and not (
+                all_ok and msg.mission_type == mav.MAV_MISSION_TYPE_ALL):
             self._ack(link, partner, mav.MAV_MISSION_UNSUPPORTED, msg.mission_type)
             return True
         if self._upload is not None:
@@ -212,9 +244,13 @@ class MissionProtocol:
         if self._refused(link, partner, msg):
             return
         self.tx.send(link, mav.MAVLink_mission_count_message(
-            partner[0], partner[1], self.store.count(), msg.mission_type))
+            partner[0], partner[1], self._store(msg.mission_type).count(), msg.mission_type))
 
-    def download_item(self, seq: int) -> MissionItem | None:
+    def download_item(self, seq: int, mission_type: int = mav.MAV_MISSION_TYPE_MISSION
+                      ) -> MissionItem | None:
+        if mission_type != mav.MAV_MISSION_TYPE_MISSION:
+            geo = self._store(mission_type).items()
+            return geo[seq] if 0 <= seq < len(geo) else None
         items = self.store.items()
         if not 0 <= seq < len(items):
             return None
@@ -231,7 +267,7 @@ class MissionProtocol:
         partner = self._partner(msg)
         if self._refused(link, partner, msg):
             return
-        it = self.download_item(msg.seq)
+        it = self.download_item(msg.seq, msg.mission_type)
         if it is None:
             self._ack(link, partner, mav.MAV_MISSION_INVALID_SEQUENCE, msg.mission_type)
             return
@@ -251,12 +287,15 @@ class MissionProtocol:
     # -- clear ------------------------------------------------------------------------------------
     def _clear(self, link, msg) -> None:
         partner = self._partner(msg)
-        if self._refused(link, partner, msg,
-                         (mav.MAV_MISSION_TYPE_MISSION, mav.MAV_MISSION_TYPE_ALL)):
+        if self._refused(link, partner, msg, all_ok=True):
             return
-        self.store.clear()
+        types = ([mav.MAV_MISSION_TYPE_MISSION, *self.geo_stores]
+                 if msg.mission_type == mav.MAV_MISSION_TYPE_ALL else [msg.mission_type])
+        for t in types:
+            self._store(t).clear()
         self._ack(link, partner, mav.MAV_MISSION_ACCEPTED, msg.mission_type)
-        self.on_updated(self.store.items())
+        for t in types:
+            self._updated(t)
 
 
 def _to_item(msg, is_int: bool) -> tuple[MissionItem, int]:

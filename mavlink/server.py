@@ -30,16 +30,17 @@ from typing import Callable, Sequence
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from . import commands as cmds
-from . import ftp, setpoints
+from . import ftp, setpoints, stream_params
 from .endpoints import Endpoint, parse_endpoint, parse_endpoints
 from .errors import ParamFileError
 from .link import Link, TcpListener, open_endpoint
+from .geo_store import GeoStore
 from .mission_protocol import MissionProtocol
 from .mission_store import MissionStore, home_item
 from .param_protocol import ParamProtocol
 from .pending_calls import PendingCalls
 from .params_file import apply_parm, load_parm, save_store
-from .streams import STREAMABLE, StreamSchedule
+from .streams import NOTHING_TO_SEND, STREAMABLE, StreamSchedule
 from .telemetry import ENCODERS, TelemetryContext, statustext_messages
 from .vehicle_api import (CommandChannel, MissionItem, ParamStore, SnapshotBox, VehicleCall,
                           VehicleCommands, VehicleSnapshot)
@@ -67,19 +68,23 @@ class GcsServer:
     vehicle: VehicleCommands, called only from ``service()`` on the vehicle thread.
     params: ParamStore; ``param_file``: .parm written atomically after PARAM_SETs (and by
     MAV_CMD_PREFLIGHT_STORAGE); load it at start with params_file.load_into_store().
-    missions: the MissionStore to serve (a fresh one by default).
+    missions: the MissionStore to serve (a fresh one by default); fence and rally: the
+    GeoStores of the plan's other two lists (fresh ones by default).
     """
 
     def __init__(self, vehicle: VehicleCommands, params: ParamStore,
                  endpoints: Sequence[str | Endpoint] | None = None, sysid: int = 1,
                  compid: int = 1, *, param_file: str | os.PathLike | None = None,
-                 missions: MissionStore | None = None, timing: ServerTiming | None = None):
+                 missions: MissionStore | None = None, timing: ServerTiming | None = None,
+                 fence: GeoStore | None = None, rally: GeoStore | None = None):
         self.vehicle = vehicle
         self.params = params
         self.sysid, self.compid = sysid, compid
         self.param_file = os.fspath(param_file) if param_file is not None else None
         self.timing = timing or ServerTiming()
         self.missions = missions or MissionStore()
+        self.fence = fence or GeoStore(mav.MAV_MISSION_TYPE_FENCE)
+        self.rally = rally or GeoStore(mav.MAV_MISSION_TYPE_RALLY)
         self.snapshots = SnapshotBox()
         eps = [e if isinstance(e, Endpoint) else parse_endpoint(e) for e in endpoints] \
             if endpoints else parse_endpoints(None)
@@ -92,11 +97,13 @@ class GcsServer:
         self._links: list[Link] = []
         self._listeners: list[TcpListener] = []
         self._schedules: dict[Link, StreamSchedule] = {}
+        self._endpoint_of: dict = {}        # link or listener -> endpoint number (SRn_*)
         self._closed_totals: collections.Counter = collections.Counter()
         now = time.monotonic()
         try:
-            for ep in eps:
+            for n, ep in enumerate(eps):
                 opened = open_endpoint(ep, sysid, compid)
+                self._endpoint_of[opened] = n
                 if isinstance(opened, TcpListener):
                     self._listeners.append(opened)
                 else:
@@ -112,14 +119,17 @@ class GcsServer:
             self.missions, self, sysid, compid, on_updated=self._mission_updated,
             on_set_current=self._mission_set_current_msg, home_item=self._home_item,
             item_resend_s=self.timing.mission_item_resend_s,
-            upload_timeout_s=self.timing.mission_upload_timeout_s)
+            upload_timeout_s=self.timing.mission_upload_timeout_s,
+            geo_stores={mav.MAV_MISSION_TYPE_FENCE: self.fence,
+                        mav.MAV_MISSION_TYPE_RALLY: self.rally},
+            on_geo_updated=self._geo_updated)
         self.planner = cmds.CommandPlanner(self)
         self.pending = PendingCalls(self.channel, self.timing.command_timeout_s,
                                     self.timing.command_hard_timeout_s)
         self._outbox: collections.deque = collections.deque()
         self._statustext_id = 0
         self._gcs_heartbeat_s: float | None = None
-        self._home_sent: dict[Link, tuple] = {}
+        self._home_sent: dict[Link, int] = {}
         self._param_dirty_s: float | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -252,6 +262,7 @@ class GcsServer:
             elif isinstance(r, TcpListener):
                 client = r.accept()
                 if client is not None:
+                    self._endpoint_of[client] = self._endpoint_of.get(r, -1)
                     self._add_link(client, now)
             else:
                 for msg in r.receive():
@@ -289,7 +300,9 @@ class GcsServer:
     # -- links ---------------------------------------------------------------------------------------
     def _add_link(self, link: Link, now: float) -> None:
         self._links.append(link)
-        self._schedules[link] = StreamSchedule(now)
+        sched = StreamSchedule(now)
+        stream_params.apply_stored(self.params, self._endpoint_of.get(link, -1), sched, now)
+        self._schedules[link] = sched
 
     def _reap_links(self) -> None:
         for link in [l for l in self._links if l.closed]:
@@ -300,6 +313,7 @@ class GcsServer:
             self._links.remove(link)
             self._schedules.pop(link, None)
             self._home_sent.pop(link, None)
+            self._endpoint_of.pop(link, None)
 
     def _close_sockets(self) -> None:
         if self._closed:
@@ -406,9 +420,16 @@ class GcsServer:
         self._run_plan(link, req, key, plan, now)
 
     def _on_request_data_stream(self, link, msg, now):
-        if self._for_us(msg.target_system, msg.target_component):
-            self._schedules[link].request_data_stream(msg.req_stream_id, msg.req_message_rate,
-                                                      msg.start_stop != 0, now)
+        if not self._for_us(msg.target_system, msg.target_component):
+            return
+        start = msg.start_stop != 0
+        if start and msg.req_message_rate <= 0:
+            return          # ArduCopter ignores a start without a rate
+        self._schedules[link].request_data_stream(msg.req_stream_id, msg.req_message_rate,
+                                                  start, now)
+        for name in stream_params.remember(self.params, self._endpoint_of.get(link, -1),
+                                           msg.req_stream_id, msg.req_message_rate, start):
+            self._param_changed(name)
 
     def _on_timesync(self, link, msg, now):
         if msg.tc1 == 0:    # a request; answer with our clock in ns, echo theirs
@@ -506,11 +527,11 @@ class GcsServer:
 
     # -- hooks used by CommandPlanner ------------------------------------------------------------
     def request_message(self, link, msg_id: int, req) -> cmds.Immediate:
+        # ArduCopter 4.6: ACCEPTED for every message it knows, even with nothing to send yet
+        # (HOME_POSITION before home is set: sent when it is), FAILED for an unknown id.
         snap = self.snapshots.latest
-        if msg_id == MSG_ID["HOME_POSITION"] and not snap.home_set:
-            return cmds.Immediate(mav.MAV_RESULT_FAILED)
         if msg_id not in ENCODERS:
-            return cmds.Immediate(mav.MAV_RESULT_UNSUPPORTED)
+            return cmds.Immediate(mav.MAV_RESULT_FAILED)
 
         def after() -> None:
             for m in ENCODERS[msg_id](snap, self._telemetry_context()):
@@ -518,8 +539,10 @@ class GcsServer:
         return cmds.Immediate(mav.MAV_RESULT_ACCEPTED, None, after)
 
     def set_message_interval(self, link, msg_id: int, interval_us: float) -> cmds.Immediate:
+        if msg_id in NOTHING_TO_SEND:
+            return cmds.Immediate(mav.MAV_RESULT_ACCEPTED)
         if msg_id not in STREAMABLE:
-            return cmds.Immediate(mav.MAV_RESULT_UNSUPPORTED)
+            return cmds.Immediate(mav.MAV_RESULT_DENIED)
         if interval_us != interval_us:      # NaN
             return cmds.Immediate(mav.MAV_RESULT_DENIED, "Message interval must be a number")
         sched = self._schedules[link]
@@ -568,6 +591,16 @@ class GcsServer:
     # -- missions ---------------------------------------------------------------------------------
     def _mission_updated(self, items: tuple[MissionItem, ...]) -> None:
         self._submit_setpoint("mission_updated", (items,))
+
+    def _geo_updated(self, mission_type: int, items: tuple[MissionItem, ...]) -> None:
+        if mission_type == mav.MAV_MISSION_TYPE_RALLY:
+            try:   # ArduCopter keeps the count in RALLY_TOTAL
+                self.params.set("RALLY_TOTAL", float(len(items)))
+            except KeyError:
+                pass
+        else:   # ArduCopter 4.6 after every fence upload or clear (debug severity)
+            self.statustext(mav.MAV_SEVERITY_DEBUG, "Fence Indexed OK")
+        self._submit_setpoint("geo_updated", (mission_type, items))
 
     def _mission_set_current_msg(self, link, msg, seq: int) -> None:
         if not 0 < seq < self.missions.count():
@@ -636,13 +669,13 @@ class GcsServer:
         snap = self.snapshots.latest
         ctx: TelemetryContext | None = None
         cache: dict[int, list] = {}
-        home = (snap.home_lat_e7, snap.home_lon_e7, snap.home_alt_msl_mm) if snap.home_set \
-            else None
+        home = snap.home_epoch if snap.home_set else None
         next_t = None
         for link in self._links:
             sched = self._schedules[link]
             if link.can_send and home is not None and self._home_sent.get(link) != home:
-                # ArduPilot announces a new home unasked (MAVSDK's "home ok" waits for it)
+                # ArduCopter announces a new home unasked, once when it is first set and once
+                # at arming (MAVSDK's "home ok" waits for it); otherwise on request or stream
                 self._home_sent[link] = home
                 if ctx is None:
                     ctx = self._telemetry_context()

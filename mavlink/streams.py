@@ -32,7 +32,8 @@ STREAM_GROUPS: dict[int, tuple[int, ...]] = {
     M.MAV_DATA_STREAM_EXTENDED_STATUS: (M.MAVLINK_MSG_ID_SYS_STATUS,
                                         M.MAVLINK_MSG_ID_MISSION_CURRENT,
                                         M.MAVLINK_MSG_ID_GPS_RAW_INT,
-                                        M.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT),
+                                        M.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT,
+                                        M.MAVLINK_MSG_ID_FENCE_STATUS),
     M.MAV_DATA_STREAM_POSITION: (M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
                                  M.MAVLINK_MSG_ID_LOCAL_POSITION_NED),
     M.MAV_DATA_STREAM_RC_CHANNELS: (M.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW,
@@ -40,11 +41,17 @@ STREAM_GROUPS: dict[int, tuple[int, ...]] = {
     M.MAV_DATA_STREAM_EXTRA1: (M.MAVLINK_MSG_ID_ATTITUDE, M.MAVLINK_MSG_ID_PID_TUNING),
     M.MAV_DATA_STREAM_EXTRA2: (M.MAVLINK_MSG_ID_VFR_HUD,),
     M.MAV_DATA_STREAM_EXTRA3: (M.MAVLINK_MSG_ID_SYSTEM_TIME, M.MAVLINK_MSG_ID_BATTERY_STATUS,
-                               M.MAVLINK_MSG_ID_VIBRATION, M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE),
+                               M.MAVLINK_MSG_ID_VIBRATION, M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
+                               M.MAVLINK_MSG_ID_EKF_STATUS_REPORT),
 }
 
 # Messages that may be streamed (everything with an encoder except the one-shot ones).
 STREAMABLE = frozenset(set(ENCODERS) - {M.MAVLINK_MSG_ID_AUTOPILOT_VERSION})
+# Messages ArduCopter accepts an interval for although this vehicle has nothing to put in them
+# (no rangefinder): ACCEPTED and never sent, as ArduCopter without the sensor. Any other id is
+# DENIED, as ArduCopter answers for messages it cannot send (MAVSDK asks for ALTITUDE,
+# ODOMETRY, ACTUATOR_* and HIL_STATE_QUATERNION and gets COMMAND_DENIED from both).
+NOTHING_TO_SEND = frozenset({M.MAVLINK_MSG_ID_DISTANCE_SENSOR})
 MIN_INTERVAL_S = 0.004        # 250 Hz cap: the vehicle publishes snapshots at 50-100 Hz anyway
 MAX_INTERVAL_S = 3600.0
 

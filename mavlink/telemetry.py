@@ -28,7 +28,9 @@ CAPABILITIES = (mav.MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
                 | mav.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET
                 | mav.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
                 | mav.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT
-                | mav.MAV_PROTOCOL_CAPABILITY_MAVLINK2)
+                | mav.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+                | mav.MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
+                | mav.MAV_PROTOCOL_CAPABILITY_MISSION_RALLY)
 
 # ArduPilot's USB vendor / product id pair for SITL builds is 0/0; keep it.
 BASE_MODE_FIXED = (mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mav.MAV_MODE_FLAG_STABILIZE_ENABLED
@@ -223,11 +225,28 @@ def extended_sys_state(s: VehicleSnapshot, ctx: TelemetryContext):
 
 
 def home_position(s: VehicleSnapshot, ctx: TelemetryContext):
+    # As ArduCopter 4.6 fills it: x, y, z = home about the EKF origin (NED, m), q unknown (NaN),
+    # time_usec = time since boot.
     if not s.home_set:
         return []
+    nan = float("nan")
     return [mav.MAVLink_home_position_message(
-        i32(s.home_lat_e7), i32(s.home_lon_e7), i32(s.home_alt_msl_mm), 0.0, 0.0, 0.0,
-        (1.0, 0.0, 0.0, 0.0), 0.0, 0.0, 0.0, ctx.unix_us())]
+        i32(s.home_lat_e7), i32(s.home_lon_e7), i32(s.home_alt_msl_mm), *map(_rnd, s.home_ned_m),
+        (nan, nan, nan, nan), 0.0, 0.0, 0.0, s.time_boot_ms * 1000)]
+
+
+def ekf_status_report(s: VehicleSnapshot, ctx: TelemetryContext):
+    return [mav.MAVLink_ekf_status_report_message(
+        u16(s.ekf_flags), _rnd(s.ekf_vel_var), _rnd(s.ekf_pos_h_var), _rnd(s.ekf_pos_v_var),
+        _rnd(s.ekf_compass_var), 0.0, 0.0)]
+
+
+def fence_status(s: VehicleSnapshot, ctx: TelemetryContext):
+    if not s.fence_enabled:
+        return []
+    return [mav.MAVLink_fence_status_message(
+        u8(s.fence_breach_status), u16(s.fence_breach_count), u8(s.fence_breach_type),
+        u32(s.fence_breach_time_ms), u8(s.fence_mitigation))]
 
 
 def autopilot_version(s: VehicleSnapshot, ctx: TelemetryContext):
@@ -262,6 +281,8 @@ ENCODERS: dict[int, Encoder] = {
     mav.MAVLINK_MSG_ID_VIBRATION: vibration,
     mav.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: extended_sys_state,
     mav.MAVLINK_MSG_ID_HOME_POSITION: home_position,
+    mav.MAVLINK_MSG_ID_EKF_STATUS_REPORT: ekf_status_report,
+    mav.MAVLINK_MSG_ID_FENCE_STATUS: fence_status,
     mav.MAVLINK_MSG_ID_AUTOPILOT_VERSION: autopilot_version,
 }
 

@@ -75,6 +75,7 @@ class SensorBit:
     AHRS = mav.MAV_SYS_STATUS_AHRS
     BATTERY = mav.MAV_SYS_STATUS_SENSOR_BATTERY
     PREARM_CHECK = mav.MAV_SYS_STATUS_PREARM_CHECK
+    GEOFENCE = mav.MAV_SYS_STATUS_GEOFENCE
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,6 +138,21 @@ class VehicleSnapshot:
     home_lat_e7: int = 0
     home_lon_e7: int = 0
     home_alt_msl_mm: int = 0
+    home_epoch: int = 0                   # +1 whenever ArduCopter would announce a new home
+    home_ned_m: tuple[float, float, float] = (0.0, 0.0, 0.0)   # about the estimator origin
+    # estimator health (EKF_STATUS_REPORT: EKF_* flags and normalised test ratios)
+    ekf_flags: int = 0
+    ekf_vel_var: float = 0.0
+    ekf_pos_h_var: float = 0.0
+    ekf_pos_v_var: float = 0.0
+    ekf_compass_var: float = 0.0
+    # geofence (FENCE_STATUS is sent only while the fence is enabled, as ArduCopter does)
+    fence_enabled: bool = False
+    fence_breach_status: int = 0
+    fence_breach_count: int = 0
+    fence_breach_type: int = mav.FENCE_BREACH_NONE
+    fence_breach_time_ms: int = 0
+    fence_mitigation: int = mav.FENCE_MITIGATE_NONE
     # GNSS receiver (raw, not the estimate)
     gps_fix_type: int = mav.GPS_FIX_TYPE_NO_GPS
     gps_sats: int = 0
@@ -254,6 +270,7 @@ class VehicleCommands(Protocol):
     def change_speed(self, speed_m_s: float, speed_type: int) -> CommandReply: ...
     def mission_set_current(self, seq: int) -> CommandReply: ...
     def mission_updated(self, items: tuple["MissionItem", ...]) -> None: ...
+    def geo_updated(self, mission_type: int, items: tuple["MissionItem", ...]) -> None: ...
     def set_position_target(self, target: PositionTarget) -> None: ...
     def set_attitude_target(self, target: AttitudeTarget) -> None: ...
     def manual_control(self, x: int, y: int, z: int, r: int, buttons: int) -> None: ...

@@ -86,3 +86,12 @@ def save_wpl(path: str | os.PathLike, items: list[MissionItem] | tuple[MissionIt
     """Atomic write (temporary file in the same folder, then rename)."""
     write_text_atomic(path, format_wpl(items), encoding="utf-8", error_cls=MissionFileError,
                       what="mission file")
+
+
+def geo_file(mission_file: str | os.PathLike, mission_type: int) -> str:
+    """Where `--mission FILE` keeps the fence (FILE.fence) and rally points (FILE.rally),
+    in the same QGC WPL 110 format (MAVProxy's `fence save` / `rally save` write it too)."""
+    suffix = {1: ".fence", 2: ".rally"}.get(mission_type)
+    if suffix is None:
+        raise ValueError(f"mission type {mission_type} has no separate file")
+    return os.fspath(mission_file) + suffix

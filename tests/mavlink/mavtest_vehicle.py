@@ -49,6 +49,9 @@ DECLS = [
     ParamDecl("DISARM_DELAY", T.MAV_PARAM_TYPE_INT8, 10, 0, 127),
     ParamDecl("INS_HNTCH_ENABLE", T.MAV_PARAM_TYPE_INT8, 0, 0, 1),
     ParamDecl("ANGLE_MAX", T.MAV_PARAM_TYPE_INT16, 3000, 1000, 8000),
+    ParamDecl("RALLY_TOTAL", T.MAV_PARAM_TYPE_INT8, 0, 0, 127),
+    ParamDecl("SR0_POSITION", T.MAV_PARAM_TYPE_INT16, 0, 0, 50),
+    ParamDecl("SR0_EXTRA1", T.MAV_PARAM_TYPE_INT16, 0, 0, 50),
 ]
 
 
@@ -186,6 +189,9 @@ class KinematicVehicle:
     def mission_updated(self, items):
         self._record("mission_updated", items)
         self.mission_items = items
+
+    def geo_updated(self, mission_type, items):
+        self._record("geo_updated", mission_type, items)
 
     def set_position_target(self, target):
         self._record("set_position_target", target)

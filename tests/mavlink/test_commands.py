@@ -116,13 +116,15 @@ def test_request_message_and_home(env):
                 mav.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET):
         assert av.capabilities & bit
     assert not av.capabilities & mav.MAV_PROTOCOL_CAPABILITY_FTP
+    assert av.capabilities & mav.MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
+    assert av.capabilities & mav.MAV_PROTOCOL_CAPABILITY_MISSION_RALLY
     assert bytes(av.flight_custom_version) == b"deadbeef"
     ack = c.command_long(mav.MAV_CMD_GET_HOME_POSITION)
     assert ack.result == mav.MAV_RESULT_ACCEPTED
     home = c.wait("HOME_POSITION")
     assert (home.latitude, home.longitude) == (-353632621, 1491652374)
     ack = c.command_long(mav.MAV_CMD_REQUEST_MESSAGE, p1=60000)
-    assert ack.result == mav.MAV_RESULT_UNSUPPORTED
+    assert ack.result == mav.MAV_RESULT_FAILED          # ArduCopter 4.6 for an unknown id
 
 
 def test_ack_within_half_a_second_even_when_vehicle_stalls(env):

@@ -148,12 +148,12 @@ def test_upload_failures_keep_previous_mission(env):
     env.client.send(mav.MAVLink_mission_count_message(1, 1, 60000, 0))
     assert env.client.wait("MISSION_ACK").type == mav.MAV_MISSION_NO_SPACE
 
-    # fence and rally are not implemented
+    # a mission type nobody serves
     env.client.drain()
-    env.client.send(mav.MAVLink_mission_count_message(1, 1, 3, mav.MAV_MISSION_TYPE_FENCE))
+    env.client.send(mav.MAVLink_mission_count_message(1, 1, 3, 7))
     nack = env.client.wait("MISSION_ACK")
     assert nack.type == mav.MAV_MISSION_UNSUPPORTED
-    assert nack.mission_type == mav.MAV_MISSION_TYPE_FENCE
+    assert nack.mission_type == 7
 
     # the GCS goes silent mid-upload: resent requests, then OPERATION_CANCELLED
     t0 = time.monotonic()

@@ -33,7 +33,7 @@ def test_set_message_interval_rates(env):
     assert cl.command_long(M.MAV_CMD_SET_MESSAGE_INTERVAL, p1=M.MAVLINK_MSG_ID_SYS_STATUS,
                            p2=-1).result == M.MAV_RESULT_ACCEPTED               # off
     assert cl.command_long(M.MAV_CMD_SET_MESSAGE_INTERVAL, p1=60000,
-                           p2=1000).result == M.MAV_RESULT_UNSUPPORTED
+                           p2=1000).result == M.MAV_RESULT_DENIED          # as ArduCopter 4.6
     cl.drain()
     c = counts(cl.collect(1.0))
     assert 25 <= c["ATTITUDE"] <= 60, c["ATTITUDE"]

@@ -32,10 +32,12 @@ pytestmark = pytest.mark.skipif(not os.path.exists(MAVPROXY), reason="MAVProxy n
 
 
 class MavProxy:
-    def __init__(self, port: int, cwd: str):
+    def __init__(self, port: int | None, cwd: str, *, master: str | None = None,
+                 modules: str = "cmdlong,mode,param,wp,arm", nowait: bool = True):
+        master = master or f"udpin:127.0.0.1:{port}"
         self.proc = subprocess.Popen(
-            [sys.executable, MAVPROXY, f"--master=udpin:127.0.0.1:{port}",
-             "--default-modules=cmdlong,mode,param,wp,arm", "--no-state", "--nowait"],
+            [sys.executable, MAVPROXY, f"--master={master}", f"--default-modules={modules}",
+             "--no-state", *(["--nowait"] if nowait else [])],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
             cwd=cwd, bufsize=1, env={**os.environ, "PYTHONUNBUFFERED": "1"})
         self.lines: queue.Queue = queue.Queue()
