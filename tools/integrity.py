@@ -249,8 +249,9 @@ def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
     if unfinished is not None:
         missing_end = {"reason": unfinished, "planned_s": duration, "channels": {
             name: {"last_s": st.last_s,
-                   "missing_s": (max(duration - st.last_s, 0.0)
-                                 if duration is not None and st.last_s is not None else None)}
+                   # Only streams with a rate are due until the end (not /setpoint, /events).
+                   "missing_s": (max(duration - st.last_s, 0.0) if duration is not None
+                                 and st.last_s is not None and st.rate_hz else None)}
             for name, st in stats.items()}}
     return IntegrityReport(stats, problems, duration, notes, missing_end)
 

@@ -35,10 +35,13 @@ rows, `t_s[i]` being the sim time of `rows[i]`. See docs/logs.md.
 Lifetime and threading: `write`, `write_records` and `pack` copy the rows
 before they return, so the caller may reuse or overwrite its arrays (ring
 views included). A writer is not thread-safe: create, write and close it
-from one thread. Every finished batch message goes to the file at once, so a
-process killed mid-run leaves a file readable up to its last batch: it loses
-at most `batch_rows` rows per channel and the records staged by
-`write_records` (4 x `batch_rows`); with compression, the open MCAP chunk.
+from one thread. Every finished batch message goes to the file at once, and
+every `flush_s` (0.5 s) of wall time or of sim time, whichever comes first,
+the partial batches of every channel go too (`flush()`; checked every few
+dozen calls, a clock read): so a process killed mid-run (SIGKILL, power cut)
+leaves a file readable up to its last flush and loses at most ~0.5 s of any
+stream, the 10 Hz GNSS as much as the 1 kHz IMU. With compression, the open
+MCAP chunk is lost too.
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ from __future__ import annotations
 import json
 import struct
 from pathlib import Path
+from time import monotonic_ns
 
 import numpy as np
 
@@ -180,6 +184,11 @@ class LogWriter:
     Use as a context manager or call close(); both flush partial batches.
     """
 
+    # Partial batches reach the file at least this often, in wall or sim time [ns].
+    FLUSH_NS = 500_000_000
+    # write_cycle / write_records read the clock every this many calls (a power of two).
+    FLUSH_CHECK_CALLS = 64
+
     def __init__(self, path: str | Path, *, metadata: dict, batch_rows: int = 1024,
                  compression: str = "none", chunk_bytes: int = 1 << 20):
         if batch_rows < 1:
@@ -209,6 +218,9 @@ class LogWriter:
         self._events = 0
         self._event_channel: int | None = None
         self._closed = False
+        self._calls = 0
+        self._flush_wall_ns = monotonic_ns() + self.FLUSH_NS
+        self._flush_sim_ns = self.FLUSH_NS
         run_json = to_json({"log_format": LOG_FORMAT_VERSION, **metadata})
         self._mcap.add_metadata(META_RUN, {"json": run_json})
         run_schema = self._mcap.register_schema(
@@ -282,6 +294,9 @@ class LogWriter:
         stage.extend(records)
         if len(stage) >= self._stage_bytes:
             self._split_stage()
+        self._calls += 1
+        if not self._calls & (self.FLUSH_CHECK_CALLS - 1):
+            self._flush_if_due(int(records[-1:].view(RECORD_DTYPE)["sim_ns"][0]))
 
     def write_cycle(self, records: np.ndarray, status: np.ndarray | None = None,
                     timing: tuple | None = None, pwm: np.ndarray | None = None) -> None:
@@ -326,6 +341,9 @@ class LogWriter:
             stage.extend(pwm)
         if len(stage) >= self._stage_bytes:
             self._split_stage()
+        self._calls += 1
+        if not self._calls & (self.FLUSH_CHECK_CALLS - 1):
+            self._flush_if_due(timing[0] if timing is not None else -1)
 
     # -- capture by a C producer (fc_sil's Core.bind_log) ---------------------
     # The producer appends raw 64-byte records straight to the queue of their kind's
@@ -379,6 +397,35 @@ class LogWriter:
         for stream in self._streams.values():
             if len(stream.pending) >= stream.batch_bytes:
                 stream.drain()
+        tm = self._tm_pending
+        # The C producer's cycles: their sim time is the newest /timing row's first field.
+        sim_ns = int.from_bytes(tm[-TIMING_DTYPE.itemsize:][:8], "little", signed=True) \
+            if tm else -1
+        self._flush_if_due(sim_ns)
+        if len(self._streams) != opened and self._capture_rebind is not None:
+            self._capture_rebind()
+
+    # -- crash safety: partial batches on a timer ------------------------------
+    def _flush_if_due(self, sim_ns: int) -> None:
+        """flush() when FLUSH_NS of wall time or of sim time passed since the last one."""
+        now = monotonic_ns()
+        if now >= self._flush_wall_ns or sim_ns >= self._flush_sim_ns:
+            self.flush()
+            self._flush_wall_ns = now + self.FLUSH_NS
+            if sim_ns >= 0:
+                self._flush_sim_ns = sim_ns + self.FLUSH_NS
+
+    def flush(self) -> None:
+        """Put every row written so far in the file: the staged records and each channel's
+        partial batch become messages now (a SIGKILL then loses nothing before this)."""
+        if self._closed:
+            return
+        opened = len(self._streams)
+        if self._stage:
+            self._split_stage()
+        for stream in self._streams.values():
+            if stream.pending:
+                stream.drain(final=True)
         if len(self._streams) != opened and self._capture_rebind is not None:
             self._capture_rebind()
 

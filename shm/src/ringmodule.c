@@ -57,7 +57,7 @@ static int64_t seconds_to_ns(double s, int64_t fallback)
 }
 
 int sb_wait_gil(sb_ready_fn ready, const void *ctx, double timeout_s, double spin_s,
-                double yield_s)
+                double yield_s, sb_doorbell *bell)
 {
     sb_wait_policy p = sb_wait_default_policy();
     p.spin_ns = seconds_to_ns(spin_s, p.spin_ns);
@@ -69,7 +69,10 @@ int sb_wait_gil(sb_ready_fn ready, const void *ctx, double timeout_s, double spi
     if (sb_monotonic_ns() >= deadline) return 0;
     int ok;
     Py_BEGIN_ALLOW_THREADS
-    ok = sb_wait_block(ready, ctx, &p, start, deadline);
+    /* With the other side's doorbell: block until it publishes (no yield, no sleep
+     * steps: a yielding waiter keeps its core on a busy machine, sb_doorbell.h). */
+    ok = bell ? sb_bell_wait(bell, ready, ctx, deadline)
+              : sb_wait_block(ready, ctx, &p, start, deadline);
     Py_END_ALLOW_THREADS
     return ok;
 }
@@ -104,6 +107,26 @@ static PyObject *mod_remove_stale(PyObject *Py_UNUSED(m), PyObject *name)
     return sb_raise_status(s, name, &diag);
 }
 
+/* probe(name) -> dict | None: a segment's header, read without attaching. */
+static PyObject *mod_probe(PyObject *Py_UNUSED(m), PyObject *name)
+{
+    const char *cname = PyUnicode_AsUTF8(name);
+    if (!cname) return NULL;
+    sb_seg_diag diag;
+    sb_seg_probe pr;
+    int s;
+    Py_BEGIN_ALLOW_THREADS
+    s = sb_segment_probe(cname, &pr, &diag);
+    Py_END_ALLOW_THREADS
+    if (s == SB_SEG_E_MISSING) Py_RETURN_NONE;
+    if (s != SB_SEG_OK) return sb_raise_status(s, name, &diag);
+    return Py_BuildValue("{sOsIsisOsLsKss}", "published", pr.published ? Py_True : Py_False,
+                         "version", pr.version, "owner_pid", (int)pr.owner_pid, "owner_alive",
+                         pr.owner_alive ? Py_True : Py_False, "created_unix_ns",
+                         (long long)pr.created_unix_ns, "bytes", (unsigned long long)pr.bytes,
+                         "tag", pr.tag);
+}
+
 /* The layout of the shared structs as this build sees them, for the tests. */
 static PyObject *mod_layout(PyObject *Py_UNUSED(m), PyObject *Py_UNUSED(a))
 {
@@ -128,6 +151,9 @@ static PyMethodDef module_methods[] = {
     {"monotonic_ns", mod_monotonic_ns, METH_NOARGS, "CLOCK_MONOTONIC [ns], the wall_ns clock"},
     {"segment_bytes", mod_segment_bytes, METH_VARARGS,
      "segment_bytes(sensor_slots, actuator_slots) -> int"},
+    {"probe", mod_probe, METH_O,
+     "probe(name) -> dict | None: header of segment `name` read without attaching (owner_pid, "
+     "owner_alive, tag, created_unix_ns, version, published, bytes); None if missing"},
     {"remove_stale", mod_remove_stale, METH_O,
      "remove_stale(name) -> bool: remove the segment if its owner is gone"},
     {"c_stream_bench", (PyCFunction)(void (*)(void))sb_bench_stream,
