@@ -63,4 +63,11 @@ static inline void sb_bell_ring(sb_doorbell *b)
  * Touches no Python state: call it without the GIL. */
 int sb_bell_wait(sb_doorbell *b, sb_ready_fn ready, const void *ctx, int64_t deadline_ns);
 
+/* sched_yield until yield_end_ns (an idle core gives a wake-up within a microsecond or
+ * two, cheaper than a futex wake on a VM), then sb_bell_wait. A yield that lets another
+ * thread run (it takes > 30 us) means the machine is busy, where yielding keeps the core
+ * from the peer: the next 1024 waits then block at once. */
+int sb_bell_wait_after_yield(sb_doorbell *b, sb_ready_fn ready, const void *ctx,
+                             int64_t yield_end_ns, int64_t deadline_ns);
+
 #endif /* SB_DOORBELL_H */

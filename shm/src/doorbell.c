@@ -7,6 +7,7 @@
 #include "sb_doorbell.h"
 
 #include <errno.h>
+#include <sched.h>
 #include <time.h>
 
 #include "sb_segment.h"
@@ -34,4 +35,33 @@ int sb_bell_wait(sb_doorbell *b, sb_ready_fn ready, const void *ctx, int64_t dea
         syscall(SYS_futex, (uint32_t *)&b->seq, FUTEX_WAIT, seen, &ts, NULL, 0);
         atomic_fetch_sub_explicit(&b->waiters, 1u, memory_order_seq_cst);
     }
+}
+
+/* A sched_yield that takes longer than this ran another thread: the machine is busy. */
+#define SB_YIELD_BUSY_NS 30000LL
+/* After that, this many waits block at once without yielding first. */
+#define SB_YIELD_OFF_WAITS 1024
+
+/* Waits left that skip the yield phase (process-local: each process judges its own cores). */
+static int yield_off_waits;
+
+int sb_bell_wait_after_yield(sb_doorbell *b, sb_ready_fn ready, const void *ctx,
+                             int64_t yield_end_ns, int64_t deadline_ns)
+{
+    if (yield_off_waits > 0) {
+        --yield_off_waits;
+    } else {
+        int64_t end = yield_end_ns < deadline_ns ? yield_end_ns : deadline_ns;
+        for (int64_t now = sb_monotonic_ns(); now < end;) {
+            if (ready(ctx)) return 1;
+            sched_yield();
+            int64_t after = sb_monotonic_ns();
+            if (after - now > SB_YIELD_BUSY_NS) {
+                yield_off_waits = SB_YIELD_OFF_WAITS;
+                break;
+            }
+            now = after;
+        }
+    }
+    return sb_bell_wait(b, ready, ctx, deadline_ns);
 }

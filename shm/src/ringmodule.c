@@ -6,6 +6,8 @@
 #define SB_MODULE_MAIN
 #include "module.h"
 
+#include <stdlib.h>
+
 #include <math.h>
 
 sb_errors SB_ERR;
@@ -56,9 +58,14 @@ static int64_t seconds_to_ns(double s, int64_t fallback)
     return (int64_t)(s * 1e9);
 }
 
+/* SILBRIDGE_NO_DOORBELL=1 at import: waits yield and sleep as before the doorbells (for
+ * A/B measurements, tools/load_bench.py --ab); publishers still ring (nobody waits). */
+static int sb_doorbells_off = 0;
+
 int sb_wait_gil(sb_ready_fn ready, const void *ctx, double timeout_s, double spin_s,
                 double yield_s, sb_doorbell *bell)
 {
+    if (sb_doorbells_off) bell = NULL;
     sb_wait_policy p = sb_wait_default_policy();
     p.spin_ns = seconds_to_ns(spin_s, p.spin_ns);
     p.yield_ns = seconds_to_ns(yield_s, p.yield_ns);
@@ -69,9 +76,10 @@ int sb_wait_gil(sb_ready_fn ready, const void *ctx, double timeout_s, double spi
     if (sb_monotonic_ns() >= deadline) return 0;
     int ok;
     Py_BEGIN_ALLOW_THREADS
-    /* With the other side's doorbell: block until it publishes (no yield, no sleep
-     * steps: a yielding waiter keeps its core on a busy machine, sb_doorbell.h). */
-    ok = bell ? sb_bell_wait(bell, ready, ctx, deadline)
+    /* With the other side's doorbell: yield while that is cheap, then block until it
+     * publishes (no sleep steps: a waiter that keeps its core on a busy machine starves
+     * the peer it waits for, sb_doorbell.h). */
+    ok = bell ? sb_bell_wait_after_yield(bell, ready, ctx, start + p.yield_ns, deadline)
               : sb_wait_block(ready, ctx, &p, start, deadline);
     Py_END_ALLOW_THREADS
     return ok;
@@ -209,6 +217,8 @@ PyMODINIT_FUNC PyInit__ring(void)
 {
     import_array();
     if (load_errors() < 0 || load_record_dtype() < 0) return NULL;
+    const char *off = getenv("SILBRIDGE_NO_DOORBELL");
+    sb_doorbells_off = off != NULL && off[0] != '\0' && off[0] != '0';
     if (PyType_Ready(&SbSegmentType) < 0 || PyType_Ready(&SbRingType) < 0) return NULL;
     PyObject *m = PyModule_Create(&ring_module);
     if (!m) return NULL;
