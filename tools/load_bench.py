@@ -57,6 +57,8 @@ def fly_factor(processes: int, duration_s: float, timeout_s: float,
            "--duration", str(duration_s), "--processes", str(processes), "--json"]
     env = dict(os.environ)
     env.pop("SILBRIDGE_NO_DOORBELL", None)
+    # Our flights' segments carry our tag: their start-up reclaims only our own leftovers.
+    env.setdefault("SILBRIDGE_OWNER_TAG", f"load-bench-{os.getpid()}")
     if not doorbell:
         env["SILBRIDGE_NO_DOORBELL"] = "1"
     try:
