@@ -54,14 +54,19 @@ def run(args) -> int:
         guard_fc(loop)
         sink = _open_log(args, loop)
         summary = None
+        ended = {}
         try:
             with STOP.polling():
                 summary = run_fc(loop, out=out, stop=STOP)
+        except BaseException as exc:
+            # The log says why it ends early (analyze then checks it up to there).
+            ended = {"aborted": f"{type(exc).__name__}: {exc}"}
+            raise
         finally:
             close_fc_loop(loop)
             if sink is not None:
                 why = (summary or {}).get("interrupted") or STOP.name
-                sink.close(**({"interrupted": why} if why else {}))
+                sink.close(**({"interrupted": why} if why else ended))
         if mav_opts is not None:
             summary["mavlink"] = loop.supervisor.summary()
     if args.json:

@@ -179,15 +179,19 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
                 fc.sink = sink
                 fc.supervisor.sink = sink
             res = None
+            ended = {}
             try:
                 with STOP.polling(), STOP.emergency(segment_unlinker(seg)):
                     res = run_bridge(sim, seg, cfg, sink=sink, out=_tee(out, sink, sim),
                                      fc_poll=in_process_poll(fc, fc_seg, seg, sim, opts.lockstep),
                                      stop=STOP)
+            except BaseException as exc:
+                ended = {"aborted": f"{type(exc).__name__}: {exc}"}
+                raise
             finally:
                 close_fc_loop(fc)
                 if sink is not None:
-                    sink.close(**_end_fields(res))
+                    sink.close(**(_end_fields(res) or ended))
             fc_summary = fc.summary()
     summary = summarise(opts, sc, sim, res, fc_summary)
     if sink is not None:

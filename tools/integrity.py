@@ -187,10 +187,14 @@ def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
     elif log.read_error:
         problems.append(f"log is corrupt: {log.read_error}; its data ends at "
                         f"{log.duration_s():.3f} s")
-    interrupted = (log.end or {}).get("interrupted")
-    if interrupted and log.end.get("end_sim_ns") is not None:
-        stopped = int(log.end["end_sim_ns"]) * 1e-9
-        notes.append(f"run interrupted by {interrupted} at {stopped:.3f} s of sim time"
+    # A run that ended early on purpose (Ctrl-C: "interrupted") or because its other half
+    # died ("aborted", e.g. the bridge was killed) is checked up to where it ended.
+    end = log.end or {}
+    early = ("interrupted by " + str(end["interrupted"])) if end.get("interrupted") else \
+        ("aborted: " + str(end["aborted"])) if end.get("aborted") else None
+    if early and end.get("end_sim_ns") is not None:
+        stopped = int(end["end_sim_ns"]) * 1e-9
+        notes.append(f"run {early} at {stopped:.3f} s of sim time"
                      + (f" (planned {duration:g} s)" if duration else ""))
         duration = stopped
 
