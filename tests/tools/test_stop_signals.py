@@ -25,13 +25,13 @@ SB = [sys.executable, "-m", "silbridge.tools"]
 class Job:
     """One command in its own process group; output to files (no pipe can fill up)."""
 
-    def __init__(self, args, tmp: Path, tag: str):
+    def __init__(self, args, tmp: Path, tag: str, *, cmd=None):
         self.out_path = tmp / f"{tag}.out"
         self.err_path = tmp / f"{tag}.err"
         self._out = open(self.out_path, "w")
         self._err = open(self.err_path, "w")
-        self.proc = subprocess.Popen(SB + list(args), stdout=self._out, stderr=self._err,
-                                     text=True, start_new_session=True)
+        self.proc = subprocess.Popen(cmd or SB + list(args), stdout=self._out,
+                                     stderr=self._err, text=True, start_new_session=True)
 
     def text(self) -> str:
         return self.out_path.read_text() + self.err_path.read_text()
@@ -120,32 +120,45 @@ def test_fly_stops_cleanly_on_a_signal(tmp_path, instance, processes, sig, group
     assert not os.path.exists(f"{log}.meta.json")
 
 
+# Stands in for the user's shell: starts both programs in its process group, survives the
+# Ctrl-C itself (as an interactive shell does) and reports each program's exit status.
+_SHELL = """
+import json, signal, subprocess, sys
+bridge_cmd, fc_cmd, out = json.loads(sys.argv[1])
+bridge = subprocess.Popen(bridge_cmd, stdout=open(out + ".bridge.out", "w"),
+                          stderr=open(out + ".bridge.err", "w"))
+fc = subprocess.Popen(fc_cmd, stdout=open(out + ".fc.out", "w"), stderr=open(out + ".fc.err", "w"))
+signal.signal(signal.SIGINT, lambda *a: None)
+print(json.dumps({"bridge": bridge.wait(), "fc": fc.wait()}), flush=True)
+"""
+
+
 def test_bridge_and_fc_programs_stop_on_ctrl_c(tmp_path, instance):
     """`silbridge bridge` and `silbridge fc` started from one shell: one Ctrl-C stops both."""
     log = tmp_path / "fc.mcap"
-    bridge = Job(["bridge", "--realtime", "--duration", "120", "--instance", instance,
-                  "--json"], tmp_path, "bridge")
-    fc = None
+    out = str(tmp_path / "pair")
+    cmds = [SB + ["bridge", "--realtime", "--duration", "120", "--instance", instance, "--json"],
+            SB + ["fc", "--instance", instance, "--no-mavlink", "--json", "--log", str(log)],
+            out]
+    shell = Job([], tmp_path, "shell", cmd=[sys.executable, "-c", _SHELL, json.dumps(cmds)])
+    bridge_err = Path(out + ".bridge.err")
     try:
-        bridge.wait_for("segment")
-        fc = subprocess.Popen(SB + ["fc", "--instance", instance, "--no-mavlink", "--json",
-                                    "--log", str(log)],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              process_group=bridge.proc.pid)
-        bridge.wait_for("check drops")
+        end = time.monotonic() + 90
+        while not (bridge_err.exists() and "check drops" in bridge_err.read_text()):
+            assert shell.proc.poll() is None and time.monotonic() < end, shell.text()
+            time.sleep(0.05)
         time.sleep(0.5)
-        bridge.killpg(signal.SIGINT)
-        rc = bridge.finish()
-        fc_out, fc_err = fc.communicate(timeout=60)
+        shell.killpg(signal.SIGINT)
+        assert shell.finish() == 0
     finally:
-        bridge.cleanup()
-        if fc is not None and fc.poll() is None:
-            fc.kill()
-            fc.wait()
-    assert rc == 130, bridge.text()[-3000:]
-    assert bridge.summary()["interrupted"] == "SIGINT"
-    assert fc.returncode == 130, fc_err[-3000:]
-    assert json.loads(fc_out.strip().splitlines()[-1])["interrupted"] in ("SIGINT", "bridge")
+        shell.cleanup()
+    rcs = json.loads(shell.out_path.read_text().strip().splitlines()[-1])
+    assert rcs == {"bridge": 130, "fc": 130}, Path(out + ".bridge.err").read_text()[-2000:] + \
+        Path(out + ".fc.err").read_text()[-2000:]
+    bridge_sum = json.loads(Path(out + ".bridge.out").read_text().strip().splitlines()[-1])
+    fc_sum = json.loads(Path(out + ".fc.out").read_text().strip().splitlines()[-1])
+    assert bridge_sum["interrupted"] == "SIGINT"
+    assert fc_sum["interrupted"] in ("SIGINT", "bridge")
     report = analyze(log)
     assert report["ok"], report["problems"]
     assert segment_gone(instance)
