@@ -46,11 +46,14 @@ class StopRequest:
         self._cleanups: dict[int, object] = {}
         self._next = 0
         self._installed = False
+        self._label = None
 
     @property
     def name(self) -> str | None:
         """"SIGINT" / "SIGTERM" once requested, else None."""
-        return signal.Signals(self.signum).name if self.requested else None
+        if not self.requested:
+            return None
+        return self._label or signal.Signals(self.signum).name
 
     def exit_code(self, default: int = 0) -> int:
         """128 + signal number once a signal stopped the run (shell convention), else default."""
@@ -93,6 +96,15 @@ class StopRequest:
         if not self._polling:
             raise KeyboardInterrupt(f"stopped by {signal.Signals(signum).name}")
 
+    def request_soft(self, label: str, signum: int = signal.SIGTERM) -> None:
+        """A stop asked for by a parent process (not a user's signal): never counts towards
+        the second-signal emergency exit, so a worker that got the terminal's Ctrl-C too
+        still finishes its log."""
+        if not self.requested:
+            self.requested = True
+            self.signum = signum
+            self._label = label
+
     def _emergency_exit(self, signum: int) -> None:
         for fn in list(self._cleanups.values())[::-1]:
             try:
@@ -125,6 +137,19 @@ STOP = StopRequest()
 
 def install() -> StopRequest:
     return STOP.install()
+
+
+# A campaign parent asks its workers to stop with this signal (tools/campaign.py).
+PARENT_STOP_SIGNAL = signal.SIGUSR1
+
+
+def install_worker() -> StopRequest:
+    """install(), plus PARENT_STOP_SIGNAL as a soft stop from the parent process."""
+    STOP.install()
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(PARENT_STOP_SIGNAL,
+                      lambda *_: STOP.request_soft("campaign stopped"))
+    return STOP
 
 
 class NeverStop:

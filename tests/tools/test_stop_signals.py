@@ -212,3 +212,36 @@ def test_sigkill_keeps_every_channel_to_the_last_second(tmp_path, victim):
     assert res["analyze_exit"] == 0, res
     if victim == "fc":
         assert not res["segment_left"]   # the bridge survived and unlinked it
+
+
+@pytest.mark.parametrize("jobs,sig,group", [(2, signal.SIGINT, True), (2, signal.SIGTERM, False),
+                                            (1, signal.SIGINT, True)])
+def test_bench_stops_cleanly_and_keeps_what_ran(tmp_path, jobs, sig, group):
+    """`silbridge bench`: a signal stops the runs in flight at their next step (their logs
+    closed, marked interrupted, analyze accepts them), starts no new run, exits 128+sig."""
+    out = tmp_path / "bench"
+    job = Job(["bench", "--scenarios", "S1", "--runs", "4", "--duration", "120", "--jobs",
+               str(jobs), "--out", str(out), "--keep-logs", "all", "--no-report", "--json"],
+              tmp_path, "bench")
+    try:
+        first = out / "logs" / "full" / "S1_run00.mcap"
+        end = time.monotonic() + 120
+        while not (first.exists() and first.stat().st_size > 300_000):
+            assert job.proc.poll() is None and time.monotonic() < end, job.text()[-3000:]
+            time.sleep(0.1)
+        if group:
+            job.killpg(sig)
+        else:
+            os.kill(job.proc.pid, sig)
+        rc = job.finish(timeout_s=90)
+    finally:
+        job.cleanup()
+    assert rc == 128 + sig, job.text()[-3000:]
+    s = job.summary()
+    assert s["interrupted"] == signal.Signals(sig).name
+    assert s["runs_done"] < s["runs_planned"] == 4
+    assert s["partial_logs"], s
+    for log in s["partial_logs"]:
+        report = analyze(Path(log))
+        assert any("interrupted" in n for n in report["integrity"]["notes"]), report
+    assert not list(Path("/dev/shm").glob(f"silbridge-bench-{job.proc.pid}-*"))
