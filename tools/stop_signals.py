@@ -100,10 +100,13 @@ class StopRequest:
         """A stop asked for by a parent process (not a user's signal): never counts towards
         the second-signal emergency exit, so a worker that got the terminal's Ctrl-C too
         still finishes its log."""
-        if not self.requested:
-            self.requested = True
-            self.signum = signum
-            self._label = label
+        if self.requested:
+            return
+        self.requested = True
+        self.signum = signum
+        self._label = label
+        if not self._polling:
+            raise KeyboardInterrupt(label)
 
     def _emergency_exit(self, signum: int) -> None:
         for fn in list(self._cleanups.values())[::-1]:
@@ -139,7 +142,8 @@ def install() -> StopRequest:
     return STOP.install()
 
 
-# A campaign parent asks its workers to stop with this signal (tools/campaign.py).
+# A parent asks its workers to stop with this signal (tools/campaign.py, the transport
+# runners): a soft stop, which a worker that got the terminal's Ctrl-C too ignores.
 PARENT_STOP_SIGNAL = signal.SIGUSR1
 
 

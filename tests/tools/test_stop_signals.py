@@ -245,3 +245,18 @@ def test_bench_stops_cleanly_and_keeps_what_ran(tmp_path, jobs, sig, group):
         report = analyze(Path(log))
         assert any("interrupted" in n for n in report["integrity"]["notes"]), report
     assert not list(Path("/dev/shm").glob(f"silbridge-bench-{job.proc.pid}-*"))
+
+
+def test_transport_stops_on_ctrl_c_without_leftovers(tmp_path):
+    """`silbridge transport`: Ctrl-C while a transport is measured stops every child; the
+    report says interrupted; exit 130; none of its segments stays (conftest checks too)."""
+    job = Job(["transport", "--imu-max", "20000", "--duration", "2", "--json"], tmp_path, "tr")
+    try:
+        job.wait_for("IMU     1,000 Hz", timeout_s=120)
+        job.killpg(signal.SIGINT)
+        rc = job.finish(timeout_s=60)
+    finally:
+        job.cleanup()
+    assert rc == 130, job.text()[-3000:]
+    assert job.summary()["interrupted"] == "SIGINT"
+    assert "again" not in job.text()      # no child took the stop for a second Ctrl-C
