@@ -67,6 +67,12 @@ class BridgeResult:
     late_steps: int = 0
     max_late_us: float = 0.0
     cpu_s: float = 0.0     # the bridge thread's CPU time in the loop (with an in-process FC: both)
+    interrupted: str | None = None  # "SIGINT"/"SIGTERM" when a signal stopped the run early
+
+
+class _NeverStop:
+    requested = False
+    name = None
 
 
 def prepare_segment(seg, sim, cfg: BridgeRunConfig) -> None:
@@ -85,9 +91,13 @@ def check_sim_step(sim) -> CheckResult:
                        f"physics dt {dt_ns / 1e6:g} ms, {per_step:g} IMU samples per step")
 
 
-def wait_attach(seg, cfg: BridgeRunConfig, peer_check=None, out=print) -> CheckResult:
+def wait_attach(seg, cfg: BridgeRunConfig, peer_check=None, out=print,
+                stop=_NeverStop) -> CheckResult | None:
+    """Wait for the FC; None if a stop was requested meanwhile."""
     t0 = time.monotonic()
     while seg.word(ls.FC_STATE) != ls.FC_STATE_READY:
+        if stop.requested:
+            return None
         if seg.word(ls.FC_STOP) or seg.word(ls.FC_STATE) == ls.FC_STATE_FAILED:
             raise PeerLost("the FC failed while starting (see its messages)")
         if peer_check is not None and not peer_check():
@@ -145,8 +155,13 @@ def pwm_rate_hz(loop: BridgeLoop, cfg: BridgeRunConfig) -> float:
 
 
 def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None, sink=None,
-               out=print) -> BridgeResult:
-    """Run one flight; returns what the bridge measured. Raises a user-facing error on failure."""
+               out=print, stop=_NeverStop) -> BridgeResult:
+    """Run one flight; returns what the bridge measured. Raises a user-facing error on failure.
+
+    stop: anything with a `requested` attribute (and `name`), read once per step; when it
+    turns true the run ends at that step as if its duration were over, the FC is told
+    (STOP = STOP_INTERRUPTED) and the result says `interrupted` (tools/stop_signals.py).
+    """
     loop = BridgeLoop(sim, seg, sink=sink, settle_s=cfg.settle_s,
                       trace=cfg.trace_hash)
     checks = [check_sim_step(sim)]
@@ -155,7 +170,13 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
         raise StartupCheckFailed(f"{checks[-1].detail}: choose an IMU rate that is a whole "
                                  f"multiple of the physics rate")
     if fc_poll is None:
-        checks.append(wait_attach(seg, cfg, peer_check, out))
+        attached = wait_attach(seg, cfg, peer_check, out, stop)
+        if attached is None:
+            seg.set_word(ls.STOP, ls.STOP_INTERRUPTED)
+            res = _result(loop, cfg, checks, 0, None)
+            res.interrupted = stop.name
+            return res
+        checks.append(attached)
         out(checks[-1].line())
     watch = PeerWatch(seg, extra_check=peer_check) if fc_poll is None else None
 
@@ -173,8 +194,15 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
     # Locals, not attribute lookups, in the per-step loop (a few hundred ns a step).
     publish, collect, word = loop.publish_step, loop.collect_pwm, seg.word
     in_process_lockstep = fc_poll is not None and cfg.lockstep
+    interrupted = None
     try:
         for k in range(1, n_steps + 1):
+            if stop.requested:
+                interrupted = stop.name
+                out(f"{interrupted or 'stop'}: run stopped at t={sim.sim_ns / _NS:.3f} s")
+                if sink is not None:
+                    sink.event(sim.sim_ns, "stop", f"interrupted by {interrupted}")
+                break
             if pacer is not None:
                 pacer.wait_for_step(k)
             publish()
@@ -206,13 +234,14 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
                 out(f"vehicle crashed at t={sim.sim_ns / _NS:.3f} s; run stopped")
                 break
     finally:
-        seg.set_word(ls.STOP, 1)
+        seg.set_word(ls.STOP, ls.STOP_INTERRUPTED if interrupted or stop.requested else 1)
     wall_ns = time.monotonic_ns() - t0
     cpu_s = time.thread_time() - cpu0
     if fc_poll is None:
         _wait_fc_done(seg, peer_check)
     res = _result(loop, cfg, checks, wall_ns, pacer)
     res.cpu_s = cpu_s
+    res.interrupted = interrupted
     return res
 
 

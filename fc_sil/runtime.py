@@ -280,10 +280,23 @@ class FcLoop:
         }
 
 
-def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print) -> dict:
+class _NeverStop:
+    requested = False
+    name = None
+
+
+# After its own Ctrl-C the FC keeps answering this long for the bridge's STOP (a terminal
+# signals both processes; the bridge ends the run at its next step, so the last step is
+# answered and the log is whole); alone (the bridge was not signalled) it then leaves.
+STOP_GRACE_S = 1.0
+
+
+def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print, stop=_NeverStop) -> dict:
     """Drive an FcLoop in its own process until the bridge says STOP.
 
-    Returns the FC summary. Raises FcLost when the bridge dies mid-run.
+    Returns the FC summary (with "interrupted": the signal that stopped this process, or
+    "bridge" when the bridge's run was interrupted, else None). Raises FcLost when the
+    bridge dies mid-run. stop: anything with `requested` and `name` (tools/stop_signals.py).
     """
     seg = loop.seg
     dt_ns = seg.word(ls.PHYSICS_DT_NS) or 1_000_000
@@ -295,15 +308,30 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print) -> dict:
         yield_s = max(2e-4, 2.0 * dt_ns / _NS)
         wait = functools.partial(wait, yield_s=yield_s)
     seg.set_word(ls.FC_STATE, ls.FC_STATE_READY)
+    interrupted = None
+    stop_deadline = None
     try:
         while True:
             if loop.poll():
                 seg.beat()
-                continue
-            if seg.word(ls.STOP):
+                if not stop.requested:
+                    continue
+            if stop.requested and stop_deadline is None:
+                interrupted = stop.name
+                stop_deadline = time.monotonic() + STOP_GRACE_S
+            stop_word = seg.word(ls.STOP)
+            if stop_word:
                 # Drain what is left so the last step is answered.
                 while loop.poll():
                     pass
+                if stop_word == ls.STOP_INTERRUPTED and interrupted is None:
+                    interrupted = "bridge"
+                break
+            if stop_deadline is not None and (time.monotonic() > stop_deadline
+                                              or not seg.peer_alive()):
+                while loop.poll():
+                    pass
+                seg.set_word(ls.FC_STOP, 1)   # the bridge stops too (PeerWatch)
                 break
             # Yield (not sleep) through about a physics period: a sleeping FC wakes
             # up to ~1 ms after its data, a yielding one within a microsecond or two.
@@ -321,4 +349,6 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print) -> dict:
         raise
     # Jitter is judged against the median cycle: the nominal period in real time
     # (dt / speed), and the natural pace of the pair in lockstep.
-    return loop.summary()
+    summary = loop.summary()
+    summary["interrupted"] = interrupted
+    return summary

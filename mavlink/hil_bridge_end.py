@@ -210,7 +210,7 @@ class HilBridgeEnd:
         self.words[i] = int(value)
         if i == ls.STOP and value and self.channel is not None and not self.channel.eof:
             c = self.codec
-            frame = c.named_value_int_encode(0, b"SB_STOP", 1).pack(c)
+            frame = c.named_value_int_encode(0, b"SB_STOP", int(value)).pack(c)
             try:
                 self.channel.send([frame, frame, frame])   # UDP: thrice, a lost one is no hang
             except HilPeerLost:

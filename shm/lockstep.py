@@ -16,11 +16,15 @@ Sim time (not a step counter) is the currency so the FC need not know dt.
 BRIDGE_SIM_NS = 0   # writer: bridge. sim time of the last fully published step
 FC_SIM_NS = 1       # writer: FC. sim time through which the FC consumed and answered
 RUN_MODE = 2        # writer: bridge, before the FC attaches. see MODE_*
-STOP = 3            # writer: bridge. 1 = run finished, FC should exit cleanly
+STOP = 3            # writer: bridge. nonzero (STOP_*) = run finished, FC should exit cleanly
 FC_STATE = 4        # writer: FC. see FC_STATE_*
 PHYSICS_DT_NS = 5   # writer: bridge, before the FC attaches
 IMU_HZ = 6          # writer: bridge, before the FC attaches
 FC_STOP = 7         # writer: FC. 1 = FC is leaving (error or finished); bridge stops
+
+# STOP values: 1 the run ended as planned; 2 a signal (Ctrl-C, SIGTERM) ended it early.
+STOP_DONE = 1
+STOP_INTERRUPTED = 2
 
 MODE_REALTIME = 0
 MODE_LOCKSTEP = 1

@@ -41,7 +41,12 @@ class Segment(_ring.SegmentBase):
         overwritten by the consumer) instead of refusing pushes (rejected).
         replace_stale: silently replace a segment left by a crashed owner;
         a segment whose owner still runs is never touched (SegmentBusyError).
+        Also reclaims other stale segments of this owner tag (shm/leftovers.py).
         """
+        if replace_stale:
+            # Leftovers of earlier crashed runs (same owner tag, over a minute old).
+            from .leftovers import reclaim_stale
+            reclaim_stale()
         seg = cls()
         seg._create(name, int(sensor_slots), int(actuator_slots), bool(overwrite),
                     bool(replace_stale))

@@ -5,6 +5,12 @@ parameters, features switched off), so the same spec gives the same log bit
 for bit wherever it runs: in a local process pool (default) or on a Ray
 cluster. Each run writes its MCAP log and its metrics are computed from that
 log alone (tools/metrics.py), exactly as `silbridge analyze` would.
+
+Ctrl-C / SIGTERM (tools/stop_signals.py): no new run starts; the runs in
+flight stop at their next step and close their logs marked interrupted (the
+workers take the signal from the terminal, or from the parent when only it was
+signalled); the campaign returns the finished runs, and the interrupted ones
+with `summary["interrupted"]` set, which callers leave out of the table.
 """
 
 from __future__ import annotations
@@ -12,7 +18,8 @@ from __future__ import annotations
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import asdict, dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
@@ -77,7 +84,10 @@ def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_s
 def run_one(spec: RunSpec) -> RunResult:
     """Fly one run in this process, log it, and compute its metrics from the log."""
     from .flight import FlightOptions, fly_one_process
+    from .stop_signals import STOP
 
+    if STOP.requested:   # queued before the stop reached this worker: never started
+        return RunResult(spec=spec, summary={"interrupted": STOP.name, "skipped": True})
     Path(spec.log_path).parent.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     if spec.fc == "ardupilot":
@@ -153,7 +163,7 @@ def run_campaign(specs, *, jobs: int | None = None, executor: str = "local",
         results = _run_local(specs, jobs or os.cpu_count() or 1, progress, label)
     else:
         raise CampaignError(f"unknown executor {executor!r}: use local or ray")
-    bad = [r for r in results if r.problems]
+    bad = [r for r in results if r.problems and not r.summary.get("interrupted")]
     if bad:
         r = bad[0]
         raise CampaignError(f"run {r.spec.scenario} #{r.spec.run_index} produced a log that "
@@ -161,23 +171,57 @@ def run_campaign(specs, *, jobs: int | None = None, executor: str = "local",
     return results
 
 
+def _worker_init() -> None:
+    """Pool workers answer Ctrl-C / SIGTERM like the command line does."""
+    from .stop_signals import install_worker
+    install_worker()
+
+
 def _run_local(specs, jobs: int, progress: bool, label: str) -> list[RunResult]:
+    from .stop_signals import PARENT_STOP_SIGNAL, STOP
+
     bar = Progress(len(specs), label, progress)
     if jobs <= 1:
         out = []
-        for s in specs:
-            out.append(run_one(s))
-            bar.step(s.scenario)
+        with STOP.polling():
+            for s in specs:
+                if STOP.requested:
+                    break
+                out.append(run_one(s))
+                bar.step(s.scenario)
         return out
     results: dict[int, RunResult] = {}
     # spawn: every worker starts clean (no inherited JSBSim or shared-memory state).
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn")) as pool:
+    with STOP.polling(), ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn"),
+                                             initializer=_worker_init) as pool:
         futures = {pool.submit(run_one, s): i for i, s in enumerate(specs)}
-        for fut in as_completed(futures):
-            i = futures[fut]
-            results[i] = fut.result()
-            bar.step(specs[i].scenario)
-    return [results[i] for i in range(len(specs))]
+        pending = set(futures)
+        forwarded = False
+        while pending:
+            done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            for fut in done:
+                i = futures[fut]
+                try:
+                    results[i] = fut.result()
+                except (BrokenProcessPool, KeyboardInterrupt):
+                    if not STOP.requested:
+                        raise
+                    continue        # a worker stopped by the signal before its run began
+                bar.step(specs[i].scenario)
+            if STOP.requested and not forwarded:
+                forwarded = True
+                for fut in pending:
+                    fut.cancel()
+                # The parent alone may have been signalled (kill PID): pass the stop on
+                # (a soft one: a worker that also got the terminal's Ctrl-C must not take
+                # it for a second Ctrl-C), so the runs in flight close their logs.
+                for proc in list(getattr(pool, "_processes", {}).values()):
+                    try:
+                        os.kill(proc.pid, PARENT_STOP_SIGNAL)
+                    except ProcessLookupError:
+                        pass
+                pending = {f for f in pending if not f.cancelled()}
+    return [results[i] for i in sorted(results)]
 
 
 def _run_ray(specs, address: str | None, progress: bool, label: str) -> list[RunResult]:
@@ -198,12 +242,18 @@ def _run_ray(specs, address: str | None, progress: bool, label: str) -> list[Run
         bar = Progress(len(specs), label, progress)
         results: dict[int, RunResult] = {}
         pending = list(refs)
-        while pending:
-            ready, pending = ray.wait(pending, num_returns=1)
-            i = index[ready[0]]
-            results[i] = ray.get(ready[0])
-            bar.step(specs[i].scenario)
-        return [results[i] for i in range(len(specs))]
+        from .stop_signals import STOP
+        with STOP.polling():
+            while pending and not STOP.requested:
+                ready, pending = ray.wait(pending, num_returns=1, timeout=0.2)
+                if not ready:
+                    continue
+                i = index[ready[0]]
+                results[i] = ray.get(ready[0])
+                bar.step(specs[i].scenario)
+            for ref in pending:   # stopped: the runs in flight are cancelled, not waited for
+                ray.cancel(ref)
+        return [results[i] for i in sorted(results)]
     finally:
         if started_here:
             ray.shutdown()

@@ -30,6 +30,7 @@ COMMANDS = {
     "params": "cmd_params",
     "shm-bench": "cmd_shm_bench",
     "fc-bench": "cmd_fc_bench",
+    "clean": "cmd_clean",
 }
 
 
@@ -68,11 +69,13 @@ def main(argv: list[str] | None = None) -> int:
         commands = {wanted: commands[wanted]}
     parser = build_parser(commands)
     args = parser.parse_args(argv)
+    from .stop_signals import install
+    stop = install()   # Ctrl-C / SIGTERM: stop at the next step (tools/stop_signals.py)
     try:
         return int(args._run(args) or 0)
     except KeyboardInterrupt:
         print("silbridge: interrupted", file=sys.stderr)
-        return 130
+        return stop.exit_code(130)
     except Exception as exc:  # noqa: BLE001 - only user-facing errors are shortened
         if getattr(exc, "user_facing", False):
             print(f"silbridge {args.command}: error: {exc}", file=sys.stderr)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -54,6 +55,19 @@ def run(args) -> int:
     t0 = time.monotonic()
     results = run_campaign(all_specs, jobs=args.jobs, executor=args.executor,
                            ray_address=args.ray_address, label="ablate")
+    from .stop_signals import STOP
+    partial = [r.spec.log_path for r in results
+               if r.summary.get("interrupted") and not r.summary.get("skipped")]
+    results = [r for r in results if not r.summary.get("interrupted")]
+    if STOP.requested:
+        stopped = {"interrupted": STOP.name, "runs_planned": len(all_specs),
+                   "runs_done": len(results), "partial_logs": partial}
+        print(f"ablate: INTERRUPTED by {STOP.name}: {len(results)} of {len(all_specs)} runs "
+              f"finished", file=sys.stderr)
+        if not any(r.spec.variant == "full" for r in results):
+            print(json.dumps(stopped) if args.json else
+                  "ablate: no full-variant run finished: no table")
+            return STOP.exit_code()
     by_variant: dict[str, list] = {}
     for r in results:
         by_variant.setdefault(r.spec.variant, []).append(r)
@@ -64,7 +78,8 @@ def run(args) -> int:
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "ablation.md").write_text(md + "\n")
     payload = {"variants": tables, "deltas": d, "wall_s": time.monotonic() - t0,
-               "runs": args.runs, "duration_s": args.duration}
+               "runs": args.runs, "duration_s": args.duration,
+               **(stopped if STOP.requested else {})}
     (out_dir / "ablation.json").write_text(json.dumps(payload, indent=2) + "\n")
     print(json.dumps(payload) if args.json else md)
-    return 0
+    return STOP.exit_code(0)

@@ -3,7 +3,10 @@
 A log failing the integrity check (tools/integrity.py) is refused: exit
 status 2 and one line naming the first problem (with --json the full list is
 also printed as one JSON object on stdout). `--force` computes the metrics of
-such a log anyway and lists its problems. Windows are in seconds of sim time.
+such a log anyway and lists its problems. An unfinished log (a killed run: no
+closing summary) or an interrupted run's log is not refused: it is checked and
+measured over what it holds, and the report says what is missing at the end
+(per channel, where its data ends). Windows are in seconds of sim time.
 """
 
 from __future__ import annotations
@@ -108,6 +111,15 @@ def _print_table(path: str, log, report, m: dict) -> None:
           f"integrity {'ok' if report.ok else 'FAILED (forced)'}")
     for p in report.problems:
         print(f"  problem: {p}")
+    for n in report.notes:
+        print(f"  note: {n}")
+    if report.unfinished:
+        planned = report.unfinished["planned_s"]
+        print(f"  missing at the end (of {planned:g} s planned):" if planned else
+              "  missing at the end:")
+        for name, c in report.unfinished["channels"].items():
+            gone = "" if c["missing_s"] is None else f", {c['missing_s']:.3f} s missing"
+            print(f"    {name:<12} data ends at {c['last_s']:.3f} s{gone}")
     print("  channels: " + ", ".join(f"{k} {v.rows}" for k, v in report.channels.items()))
     print(f"  analysis window {m['analysis_start_s']:g}-{m['analysis_end_s']:g} s, "
           f"yaw window {m['yaw_start_s']:g}-{m['yaw_end_s']:g} s")

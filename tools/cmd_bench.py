@@ -119,6 +119,21 @@ def run(args) -> int:
     results = run_campaign(specs, jobs=args.jobs, executor=args.executor,
                            ray_address=args.ray_address)
     wall_s = time.monotonic() - t0
+    # Ctrl-C / SIGTERM: the table covers the runs that finished; the partial ones are listed.
+    from .stop_signals import STOP
+    partial = [r for r in results
+               if r.summary.get("interrupted") and not r.summary.get("skipped")]
+    results = [r for r in results if not r.summary.get("interrupted")]
+    if STOP.requested:
+        stopped = {"interrupted": STOP.name, "runs_planned": len(specs),
+                   "runs_done": len(results), "partial_logs": [r.spec.log_path for r in partial]}
+        print(f"bench: INTERRUPTED by {STOP.name}: {len(results)} of {len(specs)} runs "
+              f"finished; partial logs: {', '.join(stopped['partial_logs']) or 'none'}",
+              file=sys.stderr)
+        if not results:
+            if args.json:
+                print(json.dumps(stopped))
+            return STOP.exit_code()
     table = aggregate(results, group=_group_name)
     if len(fcs) > 1:   # each scenario's ArduCopter column right after ours and the paper's
         sc = table["scenarios"]
@@ -126,6 +141,8 @@ def run(args) -> int:
     table.update({"runs": args.runs, "duration_s": args.duration, "wall_s": wall_s, "fc": fcs,
                   "executor": args.executor, "params": dict(params),
                   "sim_s_total": sum(r.summary.get("sim_s", 0.0) for r in results)})
+    if STOP.requested:
+        table.update(stopped)
     ap = FC_LABELS["ardupilot"]
     md = markdown(table).replace(f" {ap} ours |", f" {ap} |")   # "S1 ArduCopter", not "... ours"
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -143,4 +160,4 @@ def run(args) -> int:
               f"time overall)")
         print(f"logs and tables in {out_dir}/" + (f", report {index}" if index else ""),
               file=sys.stdout)
-    return 0
+    return STOP.exit_code(0)

@@ -7,7 +7,8 @@ import sys
 
 from silbridge.bridge.runner_main import prepare_segment, run_bridge
 
-from .flight import bridge_config, make_simulator, summarise
+from .flight import segment_unlinker, bridge_config, make_simulator, summarise
+from .stop_signals import STOP
 from .transport_wiring import bridge_address, bridge_segment
 from .flight_args import add_flight_arguments, options_from_args
 
@@ -41,14 +42,15 @@ def run(args) -> int:
             out(f"bridge: MAVLink HIL on {opts.transport} {bridge_address(seg)}; start "
                 f"`silbridge fc --transport {opts.transport} --hil-addr {bridge_address(seg)}` "
                 f"(or a PX4 SITL / HIL autopilot)")
-        res = run_bridge(sim, seg, cfg, out=out)
+        with STOP.polling(), STOP.emergency(segment_unlinker(seg)):
+            res = run_bridge(sim, seg, cfg, out=out, stop=STOP)
     summary = summarise(opts, sc, sim, res, {})
     if args.json:
         print(json.dumps(summary))
     else:
         from .flight import print_summary
         print_summary(summary)
-    return 1 if summary["crashed"] else 0
+    return STOP.exit_code(1 if summary["crashed"] else 0)
 
 
 def _run_ardupilot(args) -> int:

@@ -15,6 +15,7 @@ from .flight_args import (
     mavlink_wanted,
     parse_params,
 )
+from .stop_signals import STOP
 from .transport_wiring import fc_segment, guard_fc
 
 HELP = "the SIL FC program: attach to a running bridge and fly its vehicle"
@@ -58,12 +59,20 @@ def run(args) -> int:
                             mavlink=mav_opts, out=out)
         guard_fc(loop)
         sink = _open_log(args, loop)
+        summary = None
+        ended = {}
         try:
-            summary = run_fc(loop, out=out)
+            with STOP.polling():
+                summary = run_fc(loop, out=out, stop=STOP)
+        except BaseException as exc:
+            # The log says why it ends early (analyze then checks it up to there).
+            ended = {"aborted": f"{type(exc).__name__}: {exc}"}
+            raise
         finally:
             close_fc_loop(loop)
             if sink is not None:
-                sink.close()
+                why = (summary or {}).get("interrupted") or STOP.name
+                sink.close(**({"interrupted": why} if why else ended))
         if mav_opts is not None:
             summary["mavlink"] = loop.supervisor.summary()
     if args.json:
@@ -74,7 +83,9 @@ def run(args) -> int:
               f"published {summary['pwm_published']} PWM")
         print(f"sensor->FC latency p50 {lat['p50']} us p99 {lat['p99']} us; "
               f"jitter p50 {jit['p50']} us p99 {jit['p99']} us")
-    return 0
+        if summary.get("interrupted"):
+            print(f"INTERRUPTED ({summary['interrupted']}): a partial run")
+    return STOP.exit_code(0)
 
 
 def _open_log(args, loop):

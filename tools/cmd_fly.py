@@ -26,4 +26,5 @@ def run(args) -> int:
         print(json.dumps(summary))
     else:
         print_summary(summary)
-    return 1 if summary["crashed"] else 0
+    from .stop_signals import STOP
+    return STOP.exit_code(1 if summary["crashed"] else 0)

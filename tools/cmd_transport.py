@@ -45,19 +45,26 @@ def run(args) -> int:
     cfg = TransportBenchConfig(
         transports=tuple(t.strip() for t in args.transports.split(",") if t.strip()),
         imu_max_hz=int(args.imu_max), duration_s=args.duration, out_dir=args.out)
-    report = run_comparison(cfg, out=lambda s: print(s, file=sys.stderr))
+    from .stop_signals import STOP
+    with STOP.polling():
+        report = run_comparison(cfg, out=lambda s: print(s, file=sys.stderr), stop=STOP)
     if args.json:
         slim = {"transports": {n: {k: v for k, v in t.items() if k != "steps"}
                                | {"steps": [{k: v for k, v in s.items() if k != "latency_cdf_us"}
                                             for s in t["steps"]]}
                                for n, t in report["transports"].items()},
-                "config": report["config"], "wall_s": report["wall_s"]}
+                "config": report["config"], "wall_s": report["wall_s"],
+                "interrupted": report.get("interrupted")}
         if "outputs" in report:
             slim["outputs"] = report["outputs"]
         print(json.dumps(slim))
     else:
         from .transport_report import markdown
-        print(markdown(report))
+        if report["transports"]:
+            print(markdown(report))
         if "outputs" in report:
             print("wrote " + ", ".join(report["outputs"].values()))
-    return 0
+        if report.get("interrupted"):
+            print(f"INTERRUPTED by {report['interrupted']}: transports measured: "
+                  f"{', '.join(report['transports']) or 'none'}")
+    return STOP.exit_code(0)

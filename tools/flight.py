@@ -20,6 +20,7 @@ from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_b
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 
+from .stop_signals import STOP
 from .transport_wiring import (
     bridge_address,
     bridge_segment,
@@ -184,18 +185,38 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
                                      viz_hz=opts.viz_hz, live=opts.live, out=out)
                 fc.sink = sink
                 fc.supervisor.sink = sink
+            res = None
+            ended = {}
             try:
-                res = run_bridge(sim, seg, cfg, sink=sink, out=_tee(out, sink, sim),
-                                 fc_poll=in_process_poll(fc, fc_seg, seg, sim, opts.lockstep))
+                with STOP.polling(), STOP.emergency(segment_unlinker(seg)):
+                    res = run_bridge(sim, seg, cfg, sink=sink, out=_tee(out, sink, sim),
+                                     fc_poll=in_process_poll(fc, fc_seg, seg, sim, opts.lockstep),
+                                     stop=STOP)
+            except BaseException as exc:
+                ended = {"aborted": f"{type(exc).__name__}: {exc}"}
+                raise
             finally:
                 close_fc_loop(fc)
                 if sink is not None:
-                    sink.close()
+                    sink.close(**(_end_fields(res) or ended))
             fc_summary = fc.summary()
     summary = summarise(opts, sc, sim, res, fc_summary)
     if sink is not None:
         summary["log"] = opts.log_path
     return summary
+
+
+def segment_unlinker(seg):
+    """The emergency clean-up of a segment this process owns (a second Ctrl-C)."""
+    unlink = getattr(seg, "unlink", None)
+    return unlink if unlink is not None and getattr(seg, "is_owner", False) else (lambda: None)
+
+
+def _end_fields(res) -> dict:
+    """What the log's closing summary says about how the run ended."""
+    if res is None:
+        return {"interrupted": STOP.name} if STOP.requested else {}
+    return {"interrupted": res.interrupted} if res.interrupted else {}
 
 
 def _tee(out, sink, sim):
@@ -239,13 +260,14 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
                 cmd += ["--live", opts.live]
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
         try:
-            res = run_bridge(sim, seg, cfg, peer_check=lambda: proc.poll() is None,
-                             sink=sink, out=out)
-            stdout, _ = proc.communicate(timeout=10)
+            with STOP.polling(), STOP.emergency(segment_unlinker(seg)), \
+                    STOP.emergency(proc.terminate):
+                res = run_bridge(sim, seg, cfg, peer_check=lambda: proc.poll() is None,
+                                 sink=sink, out=out, stop=STOP)
+                # The FC finishes and indexes the log before it prints its summary.
+                stdout, _ = proc.communicate(timeout=30)
         finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
+            stop_child(proc)
     fc_summary = last_json_line(stdout)
     summary = summarise(opts, sc, sim, res, fc_summary)
     if meta_path:
@@ -253,6 +275,18 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
     if opts.log_path:
         summary["log"] = opts.log_path
     return summary
+
+
+def stop_child(proc, timeout_s: float = 10.0) -> None:
+    """Stop a child still running: SIGTERM first (it closes its log), SIGKILL if it hangs."""
+    if proc.poll() is not None:
+        return
+    proc.terminate()
+    try:
+        proc.wait(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
 
 
 def last_json_line(text: str) -> dict:
@@ -297,6 +331,8 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         "processes": opts.processes,
         "checks": [{"name": c.name, "ok": c.ok, "detail": c.detail} for c in res.checks],
         "late_steps": res.late_steps,
+        # The signal that ended the run early ("SIGINT"/"SIGTERM"), else None.
+        "interrupted": res.interrupted,
         **({"mavlink": fc_summary["mavlink"]} if "mavlink" in fc_summary else {}),
     }
 
@@ -318,3 +354,5 @@ def print_summary(s: dict, out=print) -> None:
     out(f"attitude RMS {f(s['attitude_rms_deg'], '{:.3f}')} deg  altitude RMS "
         f"{f(s['altitude_rms_m'], '{:.3f}')} m  crashed {s['crashed']}")
     out(f"trace hash {s['trace_hash']}")
+    if s.get("interrupted"):
+        out(f"INTERRUPTED by {s['interrupted']} at {s['sim_s']:.2f} s of sim time: a partial run")

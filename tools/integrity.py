@@ -75,6 +75,11 @@ class IntegrityReport:
     channels: dict[str, ChannelStats]
     problems: list[str]
     duration_s: float | None      # the run duration the counts are checked against
+    notes: list[str] = dataclasses.field(default_factory=list)   # how the run ended early
+    # An unfinished log (its writer was killed: no closing summary, cut at the end) is
+    # checked over what it holds; this says what is missing at the end, per channel:
+    # {"reason", "planned_s", "channels": {name: {"last_s", "missing_s"}}}. None otherwise.
+    unfinished: dict | None = None
 
     @property
     def ok(self) -> bool:
@@ -82,6 +87,7 @@ class IntegrityReport:
 
     def as_dict(self) -> dict:
         return {"ok": self.ok, "problems": list(self.problems), "duration_s": self.duration_s,
+                "notes": list(self.notes), "unfinished": self.unfinished,
                 "channels": {k: dataclasses.asdict(v) for k, v in self.channels.items()}}
 
 
@@ -155,16 +161,42 @@ def _channel_stats(name: str, rows: np.ndarray, rate_hz: float | None,
                         backwards, gap, loss)
 
 
+def unfinished_reason(log: RunLog) -> str | None:
+    """Why a log whose writer never finished is incomplete, or None (whole, or damaged)."""
+    if log.corrupt:
+        return None        # damaged data is not an unfinished run: --force only
+    if log.truncated:
+        return f"the writer never finished (killed run?): {log.read_error}"
+    if log.end is None:
+        return "the writer never finished (no closing summary)"
+    return None
+
+
 def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
                 rate_tol_pct: float = 5.0) -> IntegrityReport:
     problems: list[str] = []
+    notes: list[str] = []
     duration = expected_duration_s(log)
-    if log.read_error:
-        what = "is corrupt" if log.corrupt else "is cut short"
-        problems.append(f"log {what}: {log.read_error}; its data ends at "
+    unfinished = unfinished_reason(log)
+    # Each channel is checked over the time it covers: up to its own last row in an
+    # unfinished log (the writer flushes every channel at least every half second, so a
+    # killed run loses at most that much of each), up to the stop in an interrupted one.
+    own_span = unfinished is not None
+    if unfinished is not None:
+        notes.append(f"log unfinished: {unfinished}; metrics cover what it holds")
+    elif log.read_error:
+        problems.append(f"log is corrupt: {log.read_error}; its data ends at "
                         f"{log.duration_s():.3f} s")
-    elif log.end is None:
-        problems.append("log has no closing summary: the writer never finished (killed run?)")
+    # A run that ended early on purpose (Ctrl-C: "interrupted") or because its other half
+    # died ("aborted", e.g. the bridge was killed) is checked up to where it ended.
+    end = log.end or {}
+    early = ("interrupted by " + str(end["interrupted"])) if end.get("interrupted") else \
+        ("aborted: " + str(end["aborted"])) if end.get("aborted") else None
+    if early and end.get("end_sim_ns") is not None:
+        stopped = int(end["end_sim_ns"]) * 1e-9
+        notes.append(f"run {early} at {stopped:.3f} s of sim time"
+                     + (f" (planned {duration:g} s)" if duration else ""))
+        duration = stopped
 
     rates = nominal_rates_hz(log)
     stats: dict[str, ChannelStats] = {}
@@ -174,7 +206,10 @@ def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
             if name in rates:
                 problems.append(f"{name}: no rows, but the run config sets {rates[name]:g} Hz")
             continue
-        s = stats[name] = _channel_stats(name, rows, rates.get(name), duration)
+        span = duration
+        if own_span and len(rows) and "sim_ns" in rows.dtype.names:
+            span = int(rows["sim_ns"][-1]) * 1e-9
+        s = stats[name] = _channel_stats(name, rows, rates.get(name), span)
         if s.time_backwards:
             kind = "steps back" if name in NON_STRICT else "does not increase"
             problems.append(f"{name}: sim time {kind} {s.time_backwards} times "
@@ -187,11 +222,11 @@ def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
             if s.missing and s.missing > slack:
                 problems.append(f"{name}: {s.rows} of {s.expected} expected samples "
                                 f"({s.missing} missing, {100.0 * s.missing / s.expected:.2f} %; "
-                                f"{s.rate_hz:g} Hz for {duration:g} s; data ends at "
+                                f"{s.rate_hz:g} Hz for {span:g} s; data ends at "
                                 f"{s.last_s:.3f} s)")
             elif s.rows - s.expected > slack:
                 problems.append(f"{name}: {s.rows} samples, {s.rows - s.expected} more than "
-                                f"the {s.expected} that {s.rate_hz:g} Hz for {duration:g} s gives")
+                                f"the {s.expected} that {s.rate_hz:g} Hz for {span:g} s gives")
         seq_pct = 100.0 * s.seq_lost / (s.rows + s.seq_lost) if s.seq_lost else 0.0
         if seq_pct > max_loss_pct:
             problems.append(f"{name}: {s.seq_lost} samples lost between sequence numbers "
@@ -214,7 +249,15 @@ def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
     for e in log.events:
         if e["kind"] == "check" and not _check_passed(e):
             problems.append(f"run check failed at {e['sim_ns'] * 1e-9:.3f} s: {e['text']}")
-    return IntegrityReport(stats, problems, duration)
+    missing_end = None
+    if unfinished is not None:
+        missing_end = {"reason": unfinished, "planned_s": duration, "channels": {
+            name: {"last_s": st.last_s,
+                   # Only streams with a rate are due until the end (not /setpoint, /events).
+                   "missing_s": (max(duration - st.last_s, 0.0) if duration is not None
+                                 and st.last_s is not None and st.rate_hz else None)}
+            for name, st in stats.items()}}
+    return IntegrityReport(stats, problems, duration, notes, missing_end)
 
 
 def check_log(log: RunLog, *, max_loss_pct: float = 0.5, rate_tol_pct: float = 5.0) -> list[str]:

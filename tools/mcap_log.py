@@ -35,16 +35,20 @@ rows, `t_s[i]` being the sim time of `rows[i]`. See docs/logs.md.
 Lifetime and threading: `write`, `write_records` and `pack` copy the rows
 before they return, so the caller may reuse or overwrite its arrays (ring
 views included). A writer is not thread-safe: create, write and close it
-from one thread. Every finished batch message goes to the file at once, so a
-process killed mid-run leaves a file readable up to its last batch: it loses
-at most `batch_rows` rows per channel and the records staged by
-`write_records` (4 x `batch_rows`); with compression, the open MCAP chunk.
+from one thread. Every finished batch message goes to the file at once, and
+every `flush_s` (0.5 s) of wall time or of sim time, whichever comes first,
+the partial batches of every channel go too (`flush()`; checked every few
+dozen calls, a clock read): so a process killed mid-run (SIGKILL, power cut)
+leaves a file readable up to its last flush and loses at most ~0.5 s of any
+stream, the 10 Hz GNSS as much as the 1 kHz IMU. With compression, the open
+MCAP chunk is lost too.
 """
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+from time import monotonic_ns
 
 import numpy as np
 
@@ -153,7 +157,8 @@ class LogWriter:
 
     LogWriter(path, metadata=..., batch_rows=1024, compression="none")
       batch_rows   rows per MCAP message of every channel (memory: batch_rows
-                   rows per channel; a killed run also loses up to that many).
+                   rows per channel); partial batches are written every FLUSH_NS
+                   too, so a killed run loses at most ~0.5 s of any channel.
       compression  "none" (default): each message is written to the file as
                    it is made (tools/mcap_writer.py, no MCAP chunks), so a
                    killed run keeps every finished batch; compressing costs
@@ -171,6 +176,11 @@ class LogWriter:
                    with a live view: no file.
     Use as a context manager or call close(); both flush partial batches.
     """
+
+    # Partial batches reach the file at least this often, in wall or sim time [ns].
+    FLUSH_NS = 500_000_000
+    # write_cycle / write_records read the clock every this many calls (a power of two).
+    FLUSH_CHECK_CALLS = 64
 
     def __init__(self, path: str | Path | None, *, metadata: dict, batch_rows: int = 1024,
                  compression: str = "none", chunk_bytes: int = 1 << 20,
@@ -208,6 +218,9 @@ class LogWriter:
         self._events = 0
         self._event_channel: int | None = None
         self._closed = False
+        self._calls = 0
+        self._flush_wall_ns = monotonic_ns() + self.FLUSH_NS
+        self._flush_sim_ns = self.FLUSH_NS
         run_json = to_json({"log_format": LOG_FORMAT_VERSION, **metadata})
         self._mcap.add_metadata(META_RUN, {"json": run_json})
         run_schema = self._mcap.register_schema(
@@ -258,6 +271,9 @@ class LogWriter:
         pending += arr.tobytes()
         if len(pending) >= stream.batch_bytes:
             stream.drain()
+        self._calls += 1
+        if not self._calls & (self.FLUSH_CHECK_CALLS - 1):
+            self._flush_if_due(int(arr["sim_ns"][-1]))
 
     def pack(self, channel: str, *values) -> None:
         """Append one row from its field values in dtype order, subarrays flattened.
@@ -291,6 +307,9 @@ class LogWriter:
         stage.extend(records)
         if len(stage) >= self._stage_bytes:
             self._split_stage()
+        self._calls += 1
+        if not self._calls & (self.FLUSH_CHECK_CALLS - 1):
+            self._flush_if_due(int(records[-1:].view(RECORD_DTYPE)["sim_ns"][0]))
 
     def write_cycle(self, records: np.ndarray, status: np.ndarray | None = None,
                     timing: tuple | None = None, pwm: np.ndarray | None = None) -> None:
@@ -335,6 +354,9 @@ class LogWriter:
             stage.extend(pwm)
         if len(stage) >= self._stage_bytes:
             self._split_stage()
+        self._calls += 1
+        if not self._calls & (self.FLUSH_CHECK_CALLS - 1):
+            self._flush_if_due(timing[0] if timing is not None else -1)
 
     # -- capture by a C producer (fc_sil's Core.bind_log) ---------------------
     # The producer appends raw 64-byte records straight to the queue of their kind's
@@ -390,6 +412,35 @@ class LogWriter:
             if len(stream.pending) >= stream.batch_bytes or \
                     (self._flush_partial and stream.pending):
                 stream.drain(final=self._flush_partial)
+        tm = self._tm_pending
+        # The C producer's cycles: their sim time is the newest /timing row's first field.
+        sim_ns = int.from_bytes(tm[-TIMING_DTYPE.itemsize:][:8], "little", signed=True) \
+            if tm else -1
+        self._flush_if_due(sim_ns)
+        if len(self._streams) != opened and self._capture_rebind is not None:
+            self._capture_rebind()
+
+    # -- crash safety: partial batches on a timer ------------------------------
+    def _flush_if_due(self, sim_ns: int) -> None:
+        """flush() when FLUSH_NS of wall time or of sim time passed since the last one."""
+        now = monotonic_ns()
+        if now >= self._flush_wall_ns or sim_ns >= self._flush_sim_ns:
+            self.flush()
+            self._flush_wall_ns = now + self.FLUSH_NS
+            if sim_ns >= 0:
+                self._flush_sim_ns = sim_ns + self.FLUSH_NS
+
+    def flush(self) -> None:
+        """Put every row written so far in the file: the staged records and each channel's
+        partial batch become messages now (a SIGKILL then loses nothing before this)."""
+        if self._closed:
+            return
+        opened = len(self._streams)
+        if self._stage:
+            self._split_stage()
+        for stream in self._streams.values():
+            if stream.pending:
+                stream.drain(final=True)
         if len(self._streams) != opened and self._capture_rebind is not None:
             self._capture_rebind()
 

@@ -362,7 +362,14 @@ class TransportBenchConfig:
     out_dir: str | None = None
 
 
-def run_comparison(cfg: TransportBenchConfig, out=print) -> dict:
+class _NeverStop:
+    requested = False
+    name = None
+
+
+def run_comparison(cfg: TransportBenchConfig, out=print, stop=_NeverStop) -> dict:
+    """stop (tools/stop_signals.py): once requested, the transport being measured is
+    abandoned, its runner stopped, and the report holds the transports measured so far."""
     unknown = [t for t in cfg.transports if t not in VARIANTS]
     if unknown:
         raise TransportBenchError(f"unknown transport(s) {', '.join(unknown)}: choose from "
@@ -399,16 +406,31 @@ def run_comparison(cfg: TransportBenchConfig, out=print) -> dict:
         # Bound on one transport's series: every step and its retry, answered late.
         series_s = 2 * len(steps) * (cfg.duration_s + STEP_ANSWER_S) + 60.0
         for variant in cfg.transports:
+            if stop.requested:
+                break
             out(f"transport {variant}: IMU steps up to {steps[-1]:,} Hz, "
                 f"{cfg.duration_s:g} s each")
             runner = runners[VARIANTS[variant][1]]
             runner.send({"go": variant}, f"being sent {variant}")
-            report["transports"][variant] = runner.read_msg(series_s, f"measuring {variant}")
+            t_end = time.monotonic() + series_s
+            while not runner.has_message() and not stop.requested and time.monotonic() < t_end:
+                time.sleep(0.05)
+            if stop.requested:
+                break
+            report["transports"][variant] = runner.read_msg(
+                max(t_end - time.monotonic(), 1.0), f"measuring {variant}")
     finally:
         for runner in runners.values():
+            if stop.requested and runner.alive():
+                # A soft stop (the runner may have had the terminal's Ctrl-C already): it
+                # unwinds, its step's segment unlinked, and exits.
+                from .stop_signals import PARENT_STOP_SIGNAL
+                runner.proc.send_signal(PARENT_STOP_SIGNAL)
             runner.close()
+    if stop.requested:
+        report["interrupted"] = stop.name
     report["wall_s"] = time.monotonic() - t0
-    if cfg.out_dir:
+    if cfg.out_dir and report["transports"]:
         from .transport_report import write_outputs
         report["outputs"] = write_outputs(report, cfg.out_dir)
     return report

@@ -35,8 +35,19 @@ def main(argv: list[str] | None = None) -> int:
     f.add_argument("--no-fastcrc", action="store_true")
     args = p.parse_args(argv)
 
+    from .stop_signals import install_worker
     from .transport_procs import protocol_channel, serve_fc, serve_runner
+    # Ctrl-C, SIGTERM or the parent's soft stop: KeyboardInterrupt here, so every `with`
+    # unwinds (the step's segment is unlinked, sockets closed) before the child exits.
+    stop = install_worker()
     proto = protocol_channel()
+    try:
+        return _serve(args, proto, serve_fc, serve_runner)
+    except KeyboardInterrupt:
+        return stop.exit_code(130)
+
+
+def _serve(args, proto, serve_fc, serve_runner) -> int:
     if args.role == "fc":
         return serve_fc(proto=proto)
     steps = [int(x) for x in args.steps.split(",") if x]

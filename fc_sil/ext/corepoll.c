@@ -149,6 +149,8 @@ PyObject *fc_ext_poll_io(CoreObject *self, PyObject *Py_UNUSED(unused))
         atomic_store_explicit(sb_capi_word(io->api, io->fc_sim_word), (uint64_t)newest->sim_ns,
                               memory_order_release);
     }
+    if (k > 0 || (newest->flags & SB_FLAG_STEP_END))
+        sb_bell_ring(sb_segment_my_bell(io->api->seg)); /* the bridge may be blocked on it */
     series_add(io, 0, consume - newest->wall_ns);
     int64_t period = 0;
     if (io->prev_consume_ns) {

@@ -24,15 +24,18 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "sb_doorbell.h"
 #include "sb_records.h"
 #include "sb_ring.h"
 
 #define SB_SEG_MAGIC 0x314D485342494C53ull /* "SLIBSHM1" read little-endian */
-#define SB_SEG_VERSION 1u
+#define SB_SEG_VERSION 2u /* 2: doorbells and the owner tag */
 #define SB_SEG_WORDS 8u
 #define SB_SEG_HEADER_BYTES 4096u
 #define SB_SEG_NAME_MAX 64u
 #define SB_SEG_PREFIX "/silbridge-"
+#define SB_SEG_TAG_MAX 64u /* owner tag bytes, NUL included */
+#define SB_SEG_TAG_ENV "SILBRIDGE_OWNER_TAG"
 
 enum sb_seg_ring { SB_RING_SENSORS = 0, SB_RING_ACTUATORS = 1, SB_RING_COUNT = 2 };
 
@@ -88,6 +91,11 @@ typedef struct sb_seg_header {
     } words[SB_SEG_WORDS];
     /* Lines 11..16: ring control blocks. */
     sb_ring_ctl rings[SB_RING_COUNT];
+    /* Lines 17, 18: doorbells (sb_doorbell.h): [SB_BELL_OWNER] rung by the owner. */
+    sb_doorbell bells[SB_BELL_COUNT];
+    /* Line 19: who made it: $SILBRIDGE_OWNER_TAG of the owner at creation (a test session,
+     * a CI job), so `silbridge clean` and leak checks can tell whose a leftover is. */
+    _Alignas(SB_CACHE_LINE) char owner_tag[SB_SEG_TAG_MAX];
 } sb_seg_header;
 
 _Static_assert(sizeof(sb_seg_header) <= SB_SEG_HEADER_BYTES, "header fits its page");
@@ -96,6 +104,7 @@ _Static_assert(offsetof(sb_seg_header, peer_heartbeat) == 2 * SB_CACHE_LINE, "pe
 _Static_assert(offsetof(sb_seg_header, words) == 3 * SB_CACHE_LINE, "words start on line 3");
 _Static_assert(sizeof(((sb_seg_header *)0)->words[0]) == SB_CACHE_LINE, "one word per line");
 _Static_assert(sizeof(_Atomic int32_t) == 4, "atomic pid is a plain int32");
+_Static_assert(offsetof(sb_seg_header, bells) % SB_CACHE_LINE == 0, "bells on their own lines");
 
 /* Process-local handle of a mapped segment. */
 typedef struct sb_segment {
@@ -128,6 +137,28 @@ void sb_segment_unlink(const sb_segment *seg);
 /* Remove a segment whose owner is gone. SB_SEG_OK if removed, E_MISSING if
  * none, E_BUSY if its owner lives. */
 int sb_segment_remove_stale(const char *name, sb_seg_diag *diag);
+
+/* What a segment's header says, read without attaching (`silbridge clean`, leak checks). */
+typedef struct sb_seg_probe {
+    int published;           /* magic present */
+    uint32_t version;
+    int32_t owner_pid;
+    int owner_alive;         /* its owner lock is held and the owner did not close */
+    int64_t created_unix_ns;
+    uint64_t bytes;          /* size of the object */
+    char tag[SB_SEG_TAG_MAX]; /* owner tag (version >= 2), "" if none */
+} sb_seg_probe;
+int sb_segment_probe(const char *name, sb_seg_probe *out, sb_seg_diag *diag);
+
+/* The doorbell this side rings after publishing / waits on for the other side. */
+static inline sb_doorbell *sb_segment_my_bell(const sb_segment *seg)
+{
+    return &seg->hdr->bells[seg->is_owner ? SB_BELL_OWNER : SB_BELL_PEER];
+}
+static inline sb_doorbell *sb_segment_their_bell(const sb_segment *seg)
+{
+    return &seg->hdr->bells[seg->is_owner ? SB_BELL_PEER : SB_BELL_OWNER];
+}
 
 /* Liveness of the owner / the attached peer: pid exists, not marked closed,
  * and (seen from the other side) its lock is still held - one fcntl. */

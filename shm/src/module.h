@@ -25,6 +25,7 @@
 #endif
 
 #include "sb_capi.h"
+#include "sb_doorbell.h"
 #include "sb_ring.h"
 #include "sb_segment.h"
 #include "sb_wait.h"
@@ -76,9 +77,10 @@ static inline int sb_check_open(const SegmentObject *seg)
     return 1;
 }
 
-/* Waiting with the GIL: spin holding it, then yield/sleep with it released. */
+/* Waiting with the GIL: spin holding it, then, with it released, block on `bell`
+ * (the other side's doorbell) or, with bell NULL, yield and sleep. */
 int sb_wait_gil(sb_ready_fn ready, const void *ctx, double timeout_s, double spin_s,
-                double yield_s);
+                double yield_s, sb_doorbell *bell);
 
 /* Parse the keyword arguments of a METH_FASTCALL | METH_KEYWORDS call:
  * names[i] is filled into out[i] (borrowed) when given. */

@@ -6,6 +6,8 @@
 #define SB_MODULE_MAIN
 #include "module.h"
 
+#include <stdlib.h>
+
 #include <math.h>
 
 sb_errors SB_ERR;
@@ -56,9 +58,14 @@ static int64_t seconds_to_ns(double s, int64_t fallback)
     return (int64_t)(s * 1e9);
 }
 
+/* SILBRIDGE_NO_DOORBELL=1 at import: waits yield and sleep as before the doorbells (for
+ * A/B measurements, tools/load_bench.py --ab); publishers still ring (nobody waits). */
+static int sb_doorbells_off = 0;
+
 int sb_wait_gil(sb_ready_fn ready, const void *ctx, double timeout_s, double spin_s,
-                double yield_s)
+                double yield_s, sb_doorbell *bell)
 {
+    if (sb_doorbells_off) bell = NULL;
     sb_wait_policy p = sb_wait_default_policy();
     p.spin_ns = seconds_to_ns(spin_s, p.spin_ns);
     p.yield_ns = seconds_to_ns(yield_s, p.yield_ns);
@@ -69,7 +76,11 @@ int sb_wait_gil(sb_ready_fn ready, const void *ctx, double timeout_s, double spi
     if (sb_monotonic_ns() >= deadline) return 0;
     int ok;
     Py_BEGIN_ALLOW_THREADS
-    ok = sb_wait_block(ready, ctx, &p, start, deadline);
+    /* With the other side's doorbell: yield while that is cheap, then block until it
+     * publishes (no sleep steps: a waiter that keeps its core on a busy machine starves
+     * the peer it waits for, sb_doorbell.h). */
+    ok = bell ? sb_bell_wait_after_yield(bell, ready, ctx, start + p.yield_ns, deadline)
+              : sb_wait_block(ready, ctx, &p, start, deadline);
     Py_END_ALLOW_THREADS
     return ok;
 }
@@ -104,6 +115,26 @@ static PyObject *mod_remove_stale(PyObject *Py_UNUSED(m), PyObject *name)
     return sb_raise_status(s, name, &diag);
 }
 
+/* probe(name) -> dict | None: a segment's header, read without attaching. */
+static PyObject *mod_probe(PyObject *Py_UNUSED(m), PyObject *name)
+{
+    const char *cname = PyUnicode_AsUTF8(name);
+    if (!cname) return NULL;
+    sb_seg_diag diag;
+    sb_seg_probe pr;
+    int s;
+    Py_BEGIN_ALLOW_THREADS
+    s = sb_segment_probe(cname, &pr, &diag);
+    Py_END_ALLOW_THREADS
+    if (s == SB_SEG_E_MISSING) Py_RETURN_NONE;
+    if (s != SB_SEG_OK) return sb_raise_status(s, name, &diag);
+    return Py_BuildValue("{sOsIsisOsLsKss}", "published", pr.published ? Py_True : Py_False,
+                         "version", pr.version, "owner_pid", (int)pr.owner_pid, "owner_alive",
+                         pr.owner_alive ? Py_True : Py_False, "created_unix_ns",
+                         (long long)pr.created_unix_ns, "bytes", (unsigned long long)pr.bytes,
+                         "tag", pr.tag);
+}
+
 /* The layout of the shared structs as this build sees them, for the tests. */
 static PyObject *mod_layout(PyObject *Py_UNUSED(m), PyObject *Py_UNUSED(a))
 {
@@ -128,6 +159,9 @@ static PyMethodDef module_methods[] = {
     {"monotonic_ns", mod_monotonic_ns, METH_NOARGS, "CLOCK_MONOTONIC [ns], the wall_ns clock"},
     {"segment_bytes", mod_segment_bytes, METH_VARARGS,
      "segment_bytes(sensor_slots, actuator_slots) -> int"},
+    {"probe", mod_probe, METH_O,
+     "probe(name) -> dict | None: header of segment `name` read without attaching (owner_pid, "
+     "owner_alive, tag, created_unix_ns, version, published, bytes); None if missing"},
     {"remove_stale", mod_remove_stale, METH_O,
      "remove_stale(name) -> bool: remove the segment if its owner is gone"},
     {"c_stream_bench", (PyCFunction)(void (*)(void))sb_bench_stream,
@@ -183,6 +217,8 @@ PyMODINIT_FUNC PyInit__ring(void)
 {
     import_array();
     if (load_errors() < 0 || load_record_dtype() < 0) return NULL;
+    const char *off = getenv("SILBRIDGE_NO_DOORBELL");
+    sb_doorbells_off = off != NULL && off[0] != '\0' && off[0] != '0';
     if (PyType_Ready(&SbSegmentType) < 0 || PyType_Ready(&SbRingType) < 0) return NULL;
     PyObject *m = PyModule_Create(&ring_module);
     if (!m) return NULL;

@@ -110,6 +110,7 @@ static PyObject *Ring_try_push(RingObject *self, PyObject *const *args, Py_ssize
                      SB_RECORD_SIZE, len);
     } else if (check_kinds(data, 1) == 0) {
         int rc = sb_ring_push(self->r, (const sb_record *)data, stamp ? sb_monotonic_ns() : -1);
+        sb_bell_ring(sb_segment_my_bell(&self->owner->seg));
         res = rc == SB_RING_OK ? Py_True : Py_False;
         Py_INCREF(res);
     }
@@ -160,6 +161,7 @@ static PyObject *Ring_push_batch(RingObject *self, PyObject *const *args, Py_ssi
     if (check_kinds(data, n) == 0) {
         uint64_t k = sb_ring_push_batch(self->r, (const sb_record *)data, (uint64_t)n,
                                         stamp ? sb_monotonic_ns() : -1);
+        sb_bell_ring(sb_segment_my_bell(&self->owner->seg));
         res = PyLong_FromUnsignedLongLong(k);
     }
     if (arr) Py_DECREF(arr);
@@ -272,7 +274,8 @@ static PyObject *Ring_wait(RingObject *self, PyObject *const *args, Py_ssize_t n
     double spin_s = kw[0] ? PyFloat_AsDouble(kw[0]) : -1.0;
     double yield_s = kw[1] ? PyFloat_AsDouble(kw[1]) : -1.0;
     if (PyErr_Occurred()) return NULL;
-    int ok = sb_wait_gil(ring_ready, &ctx, timeout_s, spin_s, yield_s);
+    int ok = sb_wait_gil(ring_ready, &ctx, timeout_s, spin_s, yield_s,
+                         sb_segment_their_bell(&self->owner->seg));
     if (ok < 0) return NULL;
     return PyBool_FromLong(ok);
 }

@@ -10,6 +10,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -70,7 +71,9 @@ uint64_t sb_layout_hash(void)
         offsetof(sb_seg_header, owner_closed), offsetof(sb_seg_header, peer_heartbeat),
         offsetof(sb_seg_header, peer_attaches), offsetof(sb_seg_header, peer_pid),
         offsetof(sb_seg_header, peer_closed), offsetof(sb_seg_header, words),
-        offsetof(sb_seg_header, rings),
+        offsetof(sb_seg_header, rings), SB_SEG_TAG_MAX, sizeof(sb_doorbell),
+        offsetof(sb_seg_header, bells), offsetof(sb_doorbell, seq),
+        offsetof(sb_doorbell, waiters), offsetof(sb_seg_header, owner_tag),
     };
     uint64_t h = 14695981039346656037ull;
     for (size_t i = 0; i < sizeof facts / sizeof facts[0]; ++i) fnv(&h, facts[i]);
@@ -243,6 +246,8 @@ static int create_new(sb_segment *seg, int fd, uint64_t sensor_slots, uint64_t a
     h->created_unix_ns = clock_ns(CLOCK_REALTIME);
     h->created_mono_ns = clock_ns(CLOCK_MONOTONIC);
     h->owner_pid = (int32_t)getpid();
+    const char *tag = getenv(SB_SEG_TAG_ENV);
+    if (tag) snprintf(h->owner_tag, sizeof h->owner_tag, "%s", tag);
     uint64_t off = SB_SEG_HEADER_BYTES;
     sb_ring_ctl_init(&h->rings[SB_RING_SENSORS], sensor_slots, off, overwrite);
     off += page_align(sensor_slots * SB_RECORD_SIZE);
@@ -406,4 +411,51 @@ int sb_segment_peer_alive(const sb_segment *seg)
     if (pid == 0 || atomic_load_explicit(&h->peer_closed, memory_order_acquire)) return 0;
     if (!seg->is_owner) return 1;
     return sb_pid_alive(pid) && lock_held_by_other(seg->fd, LOCK_PEER_BYTE);
+}
+
+int sb_segment_probe(const char *name, sb_seg_probe *out, sb_seg_diag *diag)
+{
+    char shm_name[sizeof(SB_SEG_PREFIX) + SB_SEG_NAME_MAX];
+    memset(out, 0, sizeof *out);
+    memset(diag, 0, sizeof *diag);
+    if (make_shm_name(shm_name, sizeof shm_name, name) != 0) return SB_SEG_E_NAME;
+    int fd = shm_open(shm_name, O_RDONLY, 0);
+    if (fd < 0) return fail(diag, errno_status(errno), "shm_open");
+    struct stat st;
+    if (fstat(fd, &st) != 0) {
+        int s = fail(diag, SB_SEG_E_OS, "fstat");
+        close(fd);
+        return s;
+    }
+    out->bytes = (uint64_t)st.st_size;
+    /* The identity line and the owner line are where they were in version 1 too. */
+    if ((size_t)st.st_size >= sizeof(sb_seg_header)) {
+        sb_seg_header *h = mmap(NULL, sizeof *h, PROT_READ, MAP_SHARED, fd, 0);
+        if (h != MAP_FAILED) {
+            out->published = atomic_load_explicit(&h->magic, memory_order_acquire) ==
+                             SB_SEG_MAGIC;
+            if (out->published) {
+                out->version = h->version;
+                out->owner_pid = h->owner_pid;
+                out->created_unix_ns = h->created_unix_ns;
+                if (h->version >= 2) {
+                    memcpy(out->tag, h->owner_tag, sizeof out->tag);
+                    out->tag[sizeof out->tag - 1] = 0;
+                }
+                out->owner_alive =
+                    !atomic_load_explicit(&h->owner_closed, memory_order_acquire) &&
+                    lock_held_by_other(fd, LOCK_OWNER_BYTE) && sb_pid_alive(h->owner_pid);
+            }
+            munmap(h, sizeof *h);
+        }
+    }
+    if (!out->published) {
+        /* Mid-creation (young) or a creator that died before publishing (old). */
+        int64_t age_ns = clock_ns(CLOCK_REALTIME) -
+                         ((int64_t)st.st_ctim.tv_sec * 1000000000LL + st.st_ctim.tv_nsec);
+        out->owner_alive = age_ns < SB_SEG_CREATING_GRACE_NS || lock_held_by_other(fd, 0);
+        out->created_unix_ns = (int64_t)st.st_ctim.tv_sec * 1000000000LL + st.st_ctim.tv_nsec;
+    }
+    close(fd);
+    return SB_SEG_OK;
 }

@@ -195,6 +195,7 @@ static PyObject *Seg_set_word(SegmentObject *self, PyObject *const *args, Py_ssi
     if (v == (unsigned long long)-1 && PyErr_Occurred()) return NULL;
     if (sb_check_open(self)) return NULL;
     atomic_store_explicit(&self->seg.hdr->words[i].value, v, memory_order_release);
+    sb_bell_ring(sb_segment_my_bell(&self->seg));
     Py_RETURN_NONE;
 }
 
@@ -239,7 +240,8 @@ static PyObject *Seg_wait_word(SegmentObject *self, PyObject *const *args, Py_ss
     if (sb_check_open(self)) return NULL;
     word_ready_ctx ctx = {&self->seg.hdr->words[i].value, at_least};
     if (word_ready(&ctx)) Py_RETURN_TRUE;
-    int ok = sb_wait_gil(word_ready, &ctx, timeout_s, spin_s, yield_s);
+    int ok = sb_wait_gil(word_ready, &ctx, timeout_s, spin_s, yield_s,
+                         sb_segment_their_bell(&self->seg));
     if (ok < 0) return NULL;
     return PyBool_FromLong(ok);
 }
@@ -269,8 +271,9 @@ static PyObject *Seg_get_info(SegmentObject *self, void *Py_UNUSED(c))
 {
     if (sb_check_open(self)) return NULL;
     sb_seg_header *h = self->seg.hdr;
+    const sb_doorbell *b = h->bells;
     return Py_BuildValue(
-        "{sisisKsLsLsKsKsKsKsisO}", "owner_pid", (int)h->owner_pid, "peer_pid",
+        "{sisisKsLsLsKsKsKsKsisOsss(II)s(KK)}", "owner_pid", (int)h->owner_pid, "peer_pid",
         (int)atomic_load_explicit(&h->peer_pid, memory_order_acquire), "peer_attaches",
         (unsigned long long)atomic_load_explicit(&h->peer_attaches, memory_order_acquire),
         "created_unix_ns", (long long)h->created_unix_ns, "created_mono_ns",
@@ -278,7 +281,12 @@ static PyObject *Seg_get_info(SegmentObject *self, void *Py_UNUSED(c))
         "layout_hash", (unsigned long long)h->layout_hash, "sensor_slots",
         (unsigned long long)h->rings[SB_RING_SENSORS].capacity, "actuator_slots",
         (unsigned long long)h->rings[SB_RING_ACTUATORS].capacity, "version", (int)h->version,
-        "overwrite", h->rings[SB_RING_SENSORS].overwrite ? Py_True : Py_False);
+        "overwrite", h->rings[SB_RING_SENSORS].overwrite ? Py_True : Py_False, "owner_tag",
+        h->owner_tag, "bell_waiters",
+        atomic_load_explicit(&b[SB_BELL_OWNER].waiters, memory_order_acquire),
+        atomic_load_explicit(&b[SB_BELL_PEER].waiters, memory_order_acquire), "bell_wakes",
+        (unsigned long long)atomic_load_explicit(&b[SB_BELL_OWNER].wakes, memory_order_relaxed),
+        (unsigned long long)atomic_load_explicit(&b[SB_BELL_PEER].wakes, memory_order_relaxed));
 }
 
 static PyObject *Seg_get_is_owner(SegmentObject *self, void *Py_UNUSED(c))

@@ -78,9 +78,9 @@ def test_a_killed_peer_is_reported_within_a_second(victim, survivor, says):
         err = procs[survivor].stderr.read()
         assert procs[survivor].returncode == 2, err
         assert says in err
-        # Detection takes < 1 s; the bound is generous for a loaded runner and still far below
-        # the 60 s the survivor would have run had it not noticed.
-        assert elapsed < 8.0, elapsed
+        # Detection takes ~0.1 s and the exit a little more; the bound only rules out a hang
+        # (a busy 2-core runner can delay a process by seconds).
+        assert elapsed < 10.0, elapsed
     finally:
         for p in procs.values():
             if p.poll() is None:
@@ -162,7 +162,8 @@ def test_realtime_flight_keeps_to_the_wall_clock(extra):
                           *extra], capture_output=True, text=True, check=True).stdout
     d = json.loads(out)
     assert d["mode"] == "realtime x1"
-    assert d["wall_s"] >= 1.95            # paced: never faster than the wall clock
-    assert d["wall_s"] <= 10.0            # generous: a loaded runner may lag, not run away
+    # Paced: never faster than the wall clock; the upper bound only rules out a stall (a
+    # loaded 2-core runner delays steps; late steps are counted, not skipped).
+    assert 1.95 <= d["wall_s"] <= 6.0
     assert d["rates_hz"]["imu"] == pytest.approx(1000.0, rel=0.05)
     assert d["rates_hz"]["pwm"] == pytest.approx(400.0, rel=0.05)

@@ -43,7 +43,9 @@ def test_text_table(good_log):
     assert "note: log ends at 6.000 s" in proc.stdout
 
 
-def test_truncated_log_is_refused_in_one_line(good_log, tmp_path):
+def test_log_missing_whole_channels_is_refused_in_one_line(good_log, tmp_path):
+    """Cut at half a log written channel after channel: configured channels have no rows at
+    all, which no killed run explains (every channel is flushed every half second)."""
     data = good_log.read_bytes()
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(data[: len(data) // 2])
@@ -51,14 +53,55 @@ def test_truncated_log_is_refused_in_one_line(good_log, tmp_path):
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1
-    assert "fails the integrity check: log is cut short" in lines[0]
+    assert "fails the integrity check: " in lines[0] and "no rows" in lines[0]
     # --json still prints the problems as one object; --force analyses anyway.
     proc = _analyze(cut, "--json")
     assert proc.returncode == 2
     problems = json.loads(proc.stdout)["problems"]
-    assert any("expected samples" in p for p in problems)
+    assert any("no rows, but the run config sets" in p for p in problems)
     proc = _analyze(cut, "--force", "--json")
     assert proc.returncode == 0 and json.loads(proc.stdout)["ok"] is False
+
+
+def test_unfinished_log_of_a_killed_run_is_analyzed_up_to_its_end(tmp_path):
+    """A writer killed mid-run (file cut inside a record, no summary): analyze reads it
+    without --force, says where each channel ends, and computes the metrics over it."""
+    from silbridge.tools.log_synth import step_slices
+
+    run = synthetic_run(6.0, roll_err_amp_deg=2.0, pwm_amp_us=10.0)
+    path = tmp_path / "whole.mcap"
+    w = LogWriter(path, metadata=run.metadata, batch_rows=128)
+    for step in step_slices(run):          # as a run logs: all channels, step by step
+        for name, rows in step.items():
+            if len(rows):
+                w.write(name, rows)        # every 0.5 s of sim time: a flush of all channels
+    data = path.read_bytes()               # no close(): the writer "was killed"
+    w._mcap.close()
+    cut = tmp_path / "killed.mcap"
+    cut.write_bytes(data[: int(len(data) * 0.7) + 5])   # and inside a record
+    proc = _analyze(cut, "--json", "--analysis", 1, 6)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["ok"] is True
+    unfinished = out["integrity"]["unfinished"]
+    assert unfinished["reason"].startswith("the writer never finished")
+    assert unfinished["planned_s"] == pytest.approx(6.0)
+    imu = unfinished["channels"]["/imu"]
+    assert 1.0 < imu["last_s"] < 6.0
+    assert imu["missing_s"] == pytest.approx(6.0 - imu["last_s"])
+    assert out["metrics"]["att_rms_deg"] == pytest.approx(2.0 / 2 ** 0.5, rel=0.05)
+    text = _analyze(cut).stdout
+    assert "missing at the end (of 6 s planned)" in text and "/imu" in text
+
+
+def test_damaged_log_still_needs_force(good_log, tmp_path):
+    data = bytearray(good_log.read_bytes())
+    data[len(data) // 3] ^= 0xFF          # a flipped byte inside a batch: its CRC fails
+    bad = tmp_path / "damaged.mcap"
+    bad.write_bytes(bytes(data))
+    proc = _analyze(bad)
+    assert proc.returncode == 2 and "corrupt" in proc.stderr
+    assert _analyze(bad, "--force").returncode == 0
 
 
 def test_not_a_log_is_refused(tmp_path):
