@@ -1,0 +1,149 @@
+"""The Simulator as PX4's MAVLink simulator: one HIL_ACTUATOR_CONTROLS -> one PX4 step.
+
+No sockets here (bridge/px4_server.py owns the link), so tests drive the rules directly.
+
+A PX4 step is 1/STEP_HZ (4 ms at PX4's 250 Hz IMU_INTEG_RATE) = `substeps` physics steps of
+the Simulator (1 ms each) under the same motor outputs (zero-order hold); the step's frames
+(mavlink/px4_hil.py) carry time_usec = the sim time at its end, which becomes PX4's clock.
+
+Lockstep accounting, per reply (HIL_ACTUATOR_CONTROLS): PX4 stamps it with its clock, which
+the newest HIL_SENSOR set, so a reply whose time_usec is the last step sent answers that
+step (`answered`); one older than that was sent before PX4 read the newest step (`stale`:
+its motors are taken, no step is made). `unanswered` counts steps the server made without an
+answer (a reply that never came within the stall limit; lockstep broken, reported).
+
+The sink (the run log, tools/ardupilot_log.py's ArduPilotLogSink serves both foreign
+autopilots) gets step(records, pwm_record, sim) for every physics step and timing(...) once
+per PX4 step: PWM time [sim ns], reply arrival, physics done, frames sent [monotonic wall ns]
+and the wall interval since the previous reply.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from silbridge.mavlink.px4_hil import (
+    MODE_ARMED,
+    MOTORS,
+    STEP_HZ,
+    Px4SensorEncoder,
+    StepAccumulator,
+    controls_to_pwm_us,
+)
+from silbridge.shm.records import PWM_DTYPE, Kind
+
+from .runner_errors import BridgeError
+
+_NS = 1_000_000_000
+PWM_STOPPED_US = 1000
+
+
+class Px4Physics:
+    """Protocol state around a Simulator. make_sim: () -> Simulator; codec: pymavlink codec."""
+
+    def __init__(self, make_sim, codec, *, sink=None, step_hz: int = STEP_HZ, origin=None):
+        self.sim = make_sim()
+        sim = self.sim
+        if sim.physics_hz % step_hz:
+            raise BridgeError(f"PX4 step rate {step_hz} Hz must divide the physics rate "
+                              f"{sim.physics_hz} Hz")
+        self.step_hz = step_hz
+        self.substeps = sim.physics_hz // step_hz
+        if origin is None:
+            h = sim.scenario.home
+            origin = (round(h.lat_deg * 1e7), round(h.lon_deg * 1e7), round(h.alt_m * 1000))
+        self.encoder = Px4SensorEncoder(codec, origin)
+        self.acc = StepAccumulator()
+        self.sink = sink
+        self.motors_us = [PWM_STOPPED_US] * MOTORS
+        self.armed = False
+        self.last_sent_us = -1
+        self.steps = 0               # PX4 steps made
+        self.freewheel_steps = 0     # before PX4's first reply
+        self.replies = 0
+        self.answered = 0
+        self.stale = 0
+        self.unanswered = 0
+        self.lockstep_flag = None    # PX4's flags bit 0, from its replies
+        self.first_reply_us = None   # sim time of PX4's first reply
+        self._pwm = np.zeros(1, dtype=PWM_DTYPE)
+        self._pwm["kind"] = Kind.PWM
+        self._pwm["channel_count"] = MOTORS
+        self._rx_ns = 0
+        self._prev_rx_ns = 0
+
+    @property
+    def sim_us(self) -> int:
+        return self.sim.sim_ns // 1000
+
+    def on_controls(self, m, rx_wall_ns: int = 0) -> bool:
+        """A HIL_ACTUATOR_CONTROLS: take its motors; True if it answers the last step sent."""
+        self.replies += 1
+        self._rx_ns = rx_wall_ns
+        self.motors_us = controls_to_pwm_us(m.controls)
+        self.armed = bool(m.mode & MODE_ARMED)
+        self.lockstep_flag = bool(m.flags & 1)
+        if self.first_reply_us is None:
+            self.first_reply_us = self.last_sent_us
+        if m.time_usec >= self.last_sent_us:
+            self.answered += 1
+            return True
+        self.stale += 1
+        return False
+
+    def step(self, out: list, *, answered: bool = True, freewheel: bool = False) -> None:
+        """One PX4 step under the current motors; its frames are appended to out."""
+        sim = self.sim
+        acc = self.acc
+        acc.reset()
+        applied_ns = sim.sim_ns
+        motors = self.motors_us
+        sink = self.sink
+        p = self._pwm
+        if sink is not None:
+            p["seq"] = self.steps
+            p["wall_ns"] = time.monotonic_ns()
+            p["pwm_us"][0, :MOTORS] = motors
+            p["armed"] = 1 if self.armed else 0
+            p["fc_step_seq"] = self.replies
+        for _ in range(self.substeps):
+            t_ns = sim.sim_ns
+            recs = sim.step(motors)
+            acc.add(recs)
+            if sink is not None:
+                p["sim_ns"] = t_ns
+                p["imu_sim_ns"] = applied_ns
+                sink.step(recs, p, sim)
+        self.steps += 1
+        if freewheel:
+            self.freewheel_steps += 1
+        elif not answered:
+            self.unanswered += 1
+        step_us = sim.sim_ns // 1000
+        self.encoder.encode(acc, step_us, out)
+        self.last_sent_us = step_us
+        self._timing = (applied_ns, self._rx_ns, time.monotonic_ns())
+
+    def sent(self, tx_wall_ns: int) -> None:
+        """The last step's frames left at tx_wall_ns: log its timing."""
+        t = getattr(self, "_timing", None)
+        if t is None or self.sink is None:
+            return
+        self._timing = None
+        applied, rx, done = t
+        period = rx - self._prev_rx_ns if self._prev_rx_ns and rx else 0
+        if rx:
+            self._prev_rx_ns = rx
+        self.sink.timing(applied, rx, done, tx_wall_ns, period)
+
+    def stats(self) -> dict:
+        return {"px4_steps": self.steps, "freewheel_steps": self.freewheel_steps,
+                "replies": self.replies, "answered": self.answered, "stale_replies": self.stale,
+                "unanswered_steps": self.unanswered, "step_hz": self.step_hz,
+                "physics_hz": self.sim.physics_hz, "px4_lockstep_flag": self.lockstep_flag,
+                "first_reply_sim_s": (None if self.first_reply_us is None
+                                      else self.first_reply_us / 1e6),
+                "state_interval_us": self.encoder.state_interval_us,
+                "sent": dict(self.encoder.sent)}
