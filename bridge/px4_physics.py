@@ -71,6 +71,7 @@ class Px4Physics:
         self._pwm = np.zeros(1, dtype=PWM_DTYPE)
         self._pwm["kind"] = Kind.PWM
         self._pwm["channel_count"] = MOTORS
+        self._pwm_seq = 0
         self._rx_ns = 0
         self._prev_rx_ns = 0
 
@@ -103,7 +104,6 @@ class Px4Physics:
         sink = self.sink
         p = self._pwm
         if sink is not None:
-            p["seq"] = self.steps
             p["wall_ns"] = time.monotonic_ns()
             p["pwm_us"][0, :MOTORS] = motors
             p["armed"] = 1 if self.armed else 0
@@ -113,6 +113,8 @@ class Px4Physics:
             recs = sim.step(motors)
             acc.add(recs)
             if sink is not None:
+                p["seq"] = self._pwm_seq    # one PWM record per physics step (held outputs)
+                self._pwm_seq += 1
                 p["sim_ns"] = t_ns
                 p["imu_sim_ns"] = applied_ns
                 sink.step(recs, p, sim)

@@ -35,6 +35,7 @@ from .sitl_px4 import (
     log_tail,
     pick_instance,
     px4_params,
+    release_instance,
     start_px4,
     stop_px4,
 )
@@ -79,14 +80,19 @@ def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: st
     """One PX4 run: boot, arm, take off, OFFBOARD for duration_s; log from take-off."""
     sc, make_sim = _factory(scenario, seed, imu_hz)
     target = AttitudeTarget()
-    workdir = tempfile.mkdtemp(prefix="silbridge-px4-")
-    instance = pick_instance()
     phys = Px4Physics(make_sim, make_codec(SIM_SYSID, SIM_COMPID))
     sim = phys.sim
     p4 = px4_params(sim, sc, overrides=params)
-    driver = Px4Driver(instance, sim_time_s=lambda: phys.sim.sim_ns / _NS, target=target,
-                       on_takeoff=lambda: hooks.takeoff_accepted(),
-                       on_takeoff_sent=lambda: hooks.takeoff_sent(phys.sim.sim_ns))
+    instance = pick_instance()
+    workdir = tempfile.mkdtemp(prefix="silbridge-px4-")
+    try:
+        driver = Px4Driver(instance, sim_time_s=lambda: phys.sim.sim_ns / _NS, target=target,
+                           on_takeoff=lambda: hooks.takeoff_accepted(),
+                           on_takeoff_sent=lambda: hooks.takeoff_sent(phys.sim.sim_ns))
+    except BaseException:
+        release_instance(instance)
+        shutil.rmtree(workdir, ignore_errors=True)
+        raise
     forwarder = Px4SetpointForwarder(sc, sim.dt_ns, math.radians(sc.home.heading_deg),
                                      send=driver.send_attitude_target, driver=driver,
                                      hover_thrust=p4["MPC_THR_HOVER"])
@@ -112,10 +118,13 @@ def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: st
     finally:
         if driver.is_alive():
             driver.stop()
+        else:
+            driver.sock.close()
         if proc is not None:
             stop_px4(proc, instance)
         if server is not None:
             server.close()
+        release_instance(instance)
         sink.close(fc="px4", takeoff_physics_ns=sink.t0_ns, px4_instance=instance,
                    **forwarder.summary())
         if not keep_dir:
@@ -147,11 +156,14 @@ def _metadata(sc, sim, phys, duration_s, params, binary, realtime) -> dict:
     from .flight import _version
     return {
         "config": {
-            "imu_hz": sim.imu_hz, "pwm_hz": phys.step_hz, "physics_hz": sim.physics_hz,
+            "imu_hz": sim.imu_hz, "pwm_hz": sim.physics_hz, "physics_hz": sim.physics_hz,
             "baro_hz": sc.baro_hz, "mag_hz": sc.mag_hz, "gnss_hz": sc.gnss_hz,
             "duration_s": duration_s, "seed": sc.seed, "transport": "px4-mavlink-hil",
             "processes": 2, "mode": "realtime" if realtime else "lockstep",
-            "features_off": [], "fc": "px4", "px4_step_hz": phys.step_hz,
+            "features_off": [], "fc": "px4",
+            # PX4 answers once per PX4 step (px4_step_hz); /pwm and /fc/status hold one row
+            # per physics step (its outputs held), as ArduCopter runs do.
+            "px4_step_hz": phys.step_hz,
             "att_target": "scenario command sent to PX4 (SET_ATTITUDE_TARGET, OFFBOARD)",
             "fc_target": "PX4's ATTITUDE_TARGET in /fc/status ap_target_rad",
             "timing": "PX4 HIL link, bridge side: imu_wall_ns = HIL_ACTUATOR_CONTROLS "

@@ -113,13 +113,38 @@ def instance_free(n: int) -> bool:
             and all(_port_free(socket.SOCK_DGRAM, p) for p in udp) and _lock_free(n))
 
 
+_claims: dict[int, int] = {}
+
+
+def _claim(n: int) -> bool:
+    """Hold /tmp/silbridge-px4-N.claim locked for this run: parallel runs never pick the same
+    instance between checking its ports and PX4 binding them."""
+    fd = os.open(f"/tmp/silbridge-px4-{n}.claim", os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        return False
+    _claims[n] = fd
+    return True
+
+
+def release_instance(n: int) -> None:
+    fd = _claims.pop(n, None)
+    if fd is not None:
+        os.close(fd)
+
+
 def pick_instance(start: int | None = None) -> int:
-    """A free PX4 instance number in 1..9 (0 is left to a PX4 the user runs by hand)."""
+    """A free PX4 instance number in 1..9 (0 is left to a PX4 the user runs by hand),
+    claimed until release_instance(n)."""
     first = (os.getpid() % MAX_INSTANCE) if start is None else start - 1
     for i in range(MAX_INSTANCE):
         n = (first + i) % MAX_INSTANCE + 1
-        if instance_free(n):
-            return n
+        if n not in _claims and _claim(n):
+            if instance_free(n):
+                return n
+            release_instance(n)
     raise Px4Error("no free PX4 instance (1..9: TCP 4560+N, UDP 14540+N/14580+N/18570+N and "
                    "/tmp/px4_lock-N all free): stop stale px4 processes")
 
