@@ -133,6 +133,9 @@ class Px4HilServer:
                 last_rx = time.monotonic()
                 pending += self._handle(msgs, rx_ns)
             if ch.eof:
+                if stop is not None and stop():
+                    stopped_by = "stop"
+                    break
                 raise PeerLost(f"PX4 closed the simulator link at sim time "
                                f"{phys.sim.sim_ns / _NS:.3f} s ({ch.error}): did it crash or "
                                "was it stopped? Check its console output")

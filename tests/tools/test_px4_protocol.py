@@ -151,6 +151,8 @@ class _FakePx4(threading.Thread):
                 if m.get_type() == "HIL_ACTUATOR_CONTROLS":
                     m.time_usec = self.sensor_times[-1]
                 s.sendall(m.pack(self.codec))
+            while s.recv(65536):      # until the bridge closes the link
+                pass
             s.close()
         except Exception as e:  # noqa: BLE001 - reported by the test
             self.error = repr(e)
@@ -166,7 +168,7 @@ def test_bridge_freewheels_then_steps_once_per_replayed_px4_reply(recording):
         fake.start()
         res = server.serve(30.0, connect_timeout_s=10.0, stall_s=0.5, idle_timeout_s=2.0,
                            stop=lambda: phys.replies >= replies)
-        fake.join(10)
+    fake.join(10)
     assert fake.error is None
     st = res.stats
     assert st["replies"] == replies and st["answered"] == replies
