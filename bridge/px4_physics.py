@@ -15,7 +15,9 @@ answer (a reply that never came within the stall limit; lockstep broken, reporte
 The sink (the run log, tools/ardupilot_log.py's ArduPilotLogSink serves both foreign
 autopilots) gets step(records, pwm_record, sim) for every physics step and timing(...) once
 per PX4 step: PWM time [sim ns], reply arrival, physics done, frames sent [monotonic wall ns]
-and the wall interval since the previous reply.
+and the wall interval since the previous reply. Both come after the step's HIL_SENSOR is
+sent (`sent`), with the truth frame: in lockstep PX4 computes its reply meanwhile, so the
+bridge's critical path per step is the physics and one HIL_SENSOR.
 """
 
 from __future__ import annotations
@@ -72,6 +74,8 @@ class Px4Physics:
         self._pwm["kind"] = Kind.PWM
         self._pwm["channel_count"] = MOTORS
         self._pwm_seq = 0
+        self._held: list = []        # (sim_ns, records) of the step's physics steps, for the log
+        self._timing = None
         self._rx_ns = 0
         self._prev_rx_ns = 0
 
@@ -95,29 +99,20 @@ class Px4Physics:
         return False
 
     def step(self, out: list, *, answered: bool = True, freewheel: bool = False) -> None:
-        """One PX4 step under the current motors; its frames are appended to out."""
+        """One PX4 step under the current motors; the frames PX4 waits for (HIL_GPS when a fix
+        came, HIL_SENSOR) are appended to out. Send them, then call `sent`."""
         sim = self.sim
         acc = self.acc
         acc.reset()
         applied_ns = sim.sim_ns
         motors = self.motors_us
-        sink = self.sink
-        p = self._pwm
-        if sink is not None:
-            p["wall_ns"] = time.monotonic_ns()
-            p["pwm_us"][0, :MOTORS] = motors
-            p["armed"] = 1 if self.armed else 0
-            p["fc_step_seq"] = self.replies
+        held = self._held
         for _ in range(self.substeps):
             t_ns = sim.sim_ns
             recs = sim.step(motors)
             acc.add(recs)
-            if sink is not None:
-                p["seq"] = self._pwm_seq    # one PWM record per physics step (held outputs)
-                self._pwm_seq += 1
-                p["sim_ns"] = t_ns
-                p["imu_sim_ns"] = applied_ns
-                sink.step(recs, p, sim)
+            if self.sink is not None:     # the Simulator reuses its buffer: keep a copy
+                held.append((t_ns, recs.copy()))
         self.steps += 1
         if freewheel:
             self.freewheel_steps += 1
@@ -128,17 +123,33 @@ class Px4Physics:
         self.last_sent_us = step_us
         self._timing = (applied_ns, self._rx_ns, time.monotonic_ns())
 
-    def sent(self, tx_wall_ns: int) -> None:
-        """The last step's frames left at tx_wall_ns: log its timing."""
-        t = getattr(self, "_timing", None)
-        if t is None or self.sink is None:
+    def sent(self, tx_wall_ns: int, out: list) -> None:
+        """The step's sensor frames left at tx_wall_ns: what PX4 does not wait for happens
+        now, while PX4 computes its reply: the truth frame (HIL_STATE_QUATERNION, appended
+        to out: send it too), the run log's rows and the step's timing."""
+        self.encoder.encode_truth(self.acc, self.last_sent_us, out)
+        sink = self.sink
+        t = self._timing
+        if sink is None or t is None:
             return
         self._timing = None
         applied, rx, done = t
+        p = self._pwm
+        p["wall_ns"] = done
+        p["pwm_us"][0, :MOTORS] = self.motors_us
+        p["armed"] = 1 if self.armed else 0
+        p["fc_step_seq"] = self.replies
+        p["imu_sim_ns"] = applied
+        for t_ns, recs in self._held:
+            p["seq"] = self._pwm_seq    # one PWM record per physics step (held outputs)
+            self._pwm_seq += 1
+            p["sim_ns"] = t_ns
+            sink.step(recs, p, self.sim)
+        self._held.clear()
         period = rx - self._prev_rx_ns if self._prev_rx_ns and rx else 0
         if rx:
             self._prev_rx_ns = rx
-        self.sink.timing(applied, rx, done, tx_wall_ns, period)
+        sink.timing(applied, rx, done, tx_wall_ns, period)
 
     def stats(self) -> dict:
         return {"px4_steps": self.steps, "freewheel_steps": self.freewheel_steps,

@@ -104,9 +104,11 @@ class Px4HilServer:
         self.physics.step(frames, **kw)
         try:
             self.channel.send(frames)
+            frames = []
+            self.physics.sent(time.monotonic_ns(), frames)
+            self.channel.send(frames)
         except HilPeerLost as e:
             raise PeerLost(f"PX4 went away: {e}") from None
-        self.physics.sent(time.monotonic_ns())
 
     def serve(self, duration_s: float, *, realtime: bool = False, connect_timeout_s: float = 60.0,
               stall_s: float = 0.5, idle_timeout_s: float = 10.0, stop=None) -> Px4RunResult:

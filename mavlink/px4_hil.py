@@ -116,8 +116,8 @@ class StepAccumulator:
 
 
 class Px4SensorEncoder:
-    """One PX4 step -> frames: HIL_SENSOR (+ HIL_GPS when a fix came, + HIL_STATE_QUATERNION
-    at PX4's requested interval)."""
+    """One PX4 step -> frames: `encode`: HIL_GPS when a fix came, HIL_SENSOR (what PX4's
+    lockstep waits for); `encode_truth`: HIL_STATE_QUATERNION at PX4's requested interval."""
 
     def __init__(self, codec, origin=(0, 0, 0)):
         self.codec = codec
@@ -168,6 +168,9 @@ class Px4SensorEncoder:
                                        m[2], hpa, 0.0, alt, self.temperature_c, bits,
                                        0).pack(c))
         self.sent["HIL_SENSOR"] += 1
+
+    def encode_truth(self, acc: StepAccumulator, step_us: int, out: list) -> None:
+        """HIL_STATE_QUATERNION of the step, when PX4's requested interval has passed."""
         iv = self.state_interval_us
         if iv >= 0 and step_us >= self._next_state_us:
             att, nav = acc.record(_GT_ATT_K), acc.record(_GT_NAV_K)
