@@ -190,3 +190,28 @@ def test_controls_map_px4_outputs_to_our_motors():
                                                                                 2000]
     assert px4_hil.controls_to_pwm_us([-0.5, 1.5, float("nan"), 0.1] + [0.0] * 12) == \
         [1000, 2000, 1000, 1100]
+
+
+def _env_without_px4() -> dict:
+    import os
+    import sys
+    env = dict(os.environ)
+    env.pop("SILBRIDGE_PX4", None)
+    env["PATH"] = f"{Path(sys.executable).parent}:/usr/bin:/bin"
+    return env
+
+
+def test_bench_fc_px4_without_a_binary_says_how_to_build_one(tmp_path):
+    import subprocess
+    import sys
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools", "bench", "--fc", "px4",
+                        "--scenarios", "S1", "--runs", "1", "--json", "--out", str(tmp_path)],
+                       capture_output=True, text=True, timeout=60, env=_env_without_px4())
+    assert p.returncode == 0
+    assert json.loads(p.stdout)["skipped"] is True
+    assert "SILBRIDGE_PX4" in p.stderr and "make px4_sitl_default" in p.stderr
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools", "bench", "--fc", "px4",
+                        "--px4", str(tmp_path / "nope"), "--out", str(tmp_path)],
+                       capture_output=True, text=True, timeout=60, env=_env_without_px4())
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    assert "make px4_sitl_default" in p.stderr
