@@ -173,6 +173,7 @@ def px4_params(sim, scenario, *, logging: bool = False, overrides: dict | None =
         # Height from the barometer (1.2 Pa noise, ~0.1 m), not GNSS (3.2 m Gauss-Markov):
         # the altitude PX4 reports is what the companion computer holds.
         "EKF2_HGT_REF": 0,
+        "EKF2_GPS_CTRL": 5,         # GNSS horizontal position and velocity, not its altitude
         "SDLOG_MODE": 1 if logging else -1,
     }
     p.update(overrides or {})
@@ -189,11 +190,29 @@ def write_params(workdir: str, params: dict) -> str:
     return path
 
 
+def write_mavlink_rc(workdir: str, gcs: bool = False) -> str:
+    """px4-rc.mavlink for a headless run: the offboard/API link only, in PX4's 'minimal' mode
+    (heartbeat, acks, status text; the driver asks for the streams it reads), instead of
+    PX4's four links streaming at up to 50 Hz each to nobody. gcs=True adds the GCS link on
+    18570 + N -> 14550 for QGroundControl."""
+    path = os.path.join(workdir, "px4-rc.mavlink")
+    with open(path, "w") as fh:
+        fh.write("#!/bin/sh\n# written by silbridge: the MAVLink links of a headless run\n"
+                 f"mavlink start -x -u $(({OFFBOARD_LOCAL_BASE}+px4_instance)) -r 4000000 -f "
+                 f"-m minimal -o $(({OFFBOARD_REMOTE_BASE}+px4_instance))\n")
+        if gcs:
+            fh.write(f"mavlink start -x -u $(({GCS_LOCAL_BASE}+px4_instance)) -r 4000000 -f\n")
+    return path
+
+
 def start_px4(binary: str, etc: str, instance: int, workdir: str, *, params: dict,
               speed_factor: float | None = None, autostart: int = AIRFRAME,
-              extra_env: dict | None = None) -> subprocess.Popen:
-    """px4 -d -i N -w workdir etc, console to workdir/px4.log; our px4-rc.params first on PATH."""
+              extra_env: dict | None = None, headless: bool = True) -> subprocess.Popen:
+    """px4 -d -i N -w workdir etc, console to workdir/px4.log; our px4-rc.params (and, when
+    headless, px4-rc.mavlink) first on PATH."""
     write_params(workdir, params)
+    if headless:
+        write_mavlink_rc(workdir)
     exe = command_links(binary, workdir)
     env = dict(os.environ)
     env["PATH"] = os.pathsep.join((workdir, os.path.dirname(exe), env.get("PATH", "")))
