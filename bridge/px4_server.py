@@ -58,7 +58,6 @@ class Px4HilServer:
                                                                       False)
         self.address = address if self.listener is None else self.listener.addr
         self.channel = channel
-        self.link = {}
         self.check: dict = {}
 
     def close(self) -> None:

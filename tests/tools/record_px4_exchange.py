@@ -14,6 +14,7 @@ import argparse
 import json
 import os
 import re
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -74,6 +75,7 @@ def main() -> None:
         server.close()
         sp.release_instance(n)
     text = open(os.path.join(work, "px4.log"), errors="replace").read()
+    shutil.rmtree(work, ignore_errors=True)
     version = re.search(r"PX4 git-hash[^\n]*|px4 starting", text)
     FIXTURE.write_text(json.dumps({
         "source": "PX4 v1.15.4 SITL, airframe 10016_none_iris, against bridge/px4_server.py "

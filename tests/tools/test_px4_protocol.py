@@ -11,7 +11,10 @@ it did with PX4: freewheels until the first reply, then steps exactly once per r
 from __future__ import annotations
 
 import json
+import os
 import socket
+import subprocess
+import sys
 import threading
 from pathlib import Path
 
@@ -193,8 +196,6 @@ def test_controls_map_px4_outputs_to_our_motors():
 
 
 def _env_without_px4() -> dict:
-    import os
-    import sys
     env = dict(os.environ)
     env.pop("SILBRIDGE_PX4", None)
     env["PATH"] = f"{Path(sys.executable).parent}:/usr/bin:/bin"
@@ -202,8 +203,6 @@ def _env_without_px4() -> dict:
 
 
 def test_bench_fc_px4_without_a_binary_says_how_to_build_one(tmp_path):
-    import subprocess
-    import sys
     p = subprocess.run([sys.executable, "-m", "silbridge.tools", "bench", "--fc", "px4",
                         "--scenarios", "S1", "--runs", "1", "--json", "--out", str(tmp_path)],
                        capture_output=True, text=True, timeout=60, env=_env_without_px4())
