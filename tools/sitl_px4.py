@@ -223,9 +223,13 @@ def start_px4(binary: str, etc: str, instance: int, workdir: str, *, params: dic
     env.update(extra_env or {})
     log = open(os.path.join(workdir, "px4.log"), "w")
     try:
+        # Its own session: a Ctrl-C reaches us, and we stop PX4 in order (stop_px4). If we
+        # die without that, the kernel kills it (PR_SET_PDEATHSIG): no orphan PX4 holding
+        # its instance.
         return subprocess.Popen([exe, "-d", "-i", str(instance), "-w", workdir, etc],
                                 cwd=workdir, env=env, stdout=log, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, start_new_session=True)
+                                stdin=subprocess.DEVNULL, start_new_session=True,
+                                preexec_fn=_die_with_parent)
     finally:
         log.close()
 
@@ -247,6 +251,14 @@ def command_links(binary: str, workdir: str) -> str:
         if not os.path.lexists(link):
             os.symlink(target, link)
     return os.path.join(bindir, "px4")
+
+
+def _die_with_parent() -> None:
+    try:
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)   # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
 
 
 def stop_px4(proc: subprocess.Popen, instance: int | None = None, grace_s: float = 3.0) -> None:
