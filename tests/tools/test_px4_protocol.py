@@ -169,19 +169,20 @@ def test_bridge_freewheels_then_steps_once_per_replayed_px4_reply(recording):
     with Px4HilServer(phys, ("127.0.0.1", 0)) as server:
         fake = _FakePx4(server.address[1], events)
         fake.start()
-        res = server.serve(30.0, connect_timeout_s=10.0, stall_s=0.5, idle_timeout_s=2.0,
+        res = server.serve(30.0, connect_timeout_s=10.0, stall_s=0.5, idle_timeout_s=10.0,
                            stop=lambda: phys.replies >= replies)
     fake.join(10)
     assert fake.error is None
     st = res.stats
-    assert st["replies"] == replies and st["answered"] == replies
-    assert st["unanswered_steps"] == 0 and st["stale_replies"] == 0
+    assert st["replies"] == replies and st["unanswered_steps"] == 0
     assert st["px4_lockstep_flag"] is True
-    # The freewheel lasted until the first reply (the fake sends it after the recorded
-    # number of steps; the bridge may add a few more while it travels).
-    assert data["freewheel_steps"] <= st["freewheel_steps"] <= data["freewheel_steps"] + 50
-    # Then one step per reply: the last reply was answered by one more step.
-    assert st["px4_steps"] == st["freewheel_steps"] + replies
+    # The freewheel lasted until the first reply: the fake sends it after the recorded number
+    # of steps; on a busy machine the bridge may have freewheeled a few more meanwhile, and
+    # then that first reply is stale (it answers an older step: no step is made for it).
+    assert st["freewheel_steps"] >= data["freewheel_steps"]
+    assert st["stale_replies"] <= 1 and st["answered"] + st["stale_replies"] == replies
+    # Then exactly one step per answer.
+    assert st["px4_steps"] == st["freewheel_steps"] + st["answered"]
     assert st["state_interval_us"] == 5000
     assert fake.sensor_times == [4000 * (k + 1) for k in range(len(fake.sensor_times))]
     assert res.startup_check == {} or res.startup_check["passed"]
