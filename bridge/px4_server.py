@@ -110,7 +110,7 @@ class Px4HilServer:
             raise PeerLost(f"PX4 went away: {e}") from None
 
     def serve(self, duration_s: float, *, realtime: bool = False, connect_timeout_s: float = 60.0,
-              stall_s: float = 0.5, idle_timeout_s: float = 10.0, stop=None) -> Px4RunResult:
+              stall_s: float = 2.0, idle_timeout_s: float = 10.0, stop=None) -> Px4RunResult:
         phys = self.physics
         t0 = time.monotonic()
         self._accept(connect_timeout_s, stop)
