@@ -4,7 +4,8 @@
     result = server.serve(duration_s, realtime=False, stop=...)
 
 PX4 connects (TCP; `simulator_mavlink start -c PORT`). Until its first HIL_ACTUATOR_CONTROLS
-the server freewheels: one PX4 step with the motors stopped per FREEWHEEL_WALL_S of wall time,
+the server freewheels: one PX4 step with the motors stopped per FREEWHEEL_WALL_S of wall time
+(per step period in real time),
 because PX4 cannot answer before its estimator and logger run, and they need sim time to move.
 Then:
 - lockstep (default): one step per reply that answers the last step sent (bridge/px4_physics.py
@@ -146,7 +147,7 @@ class Px4HilServer:
                                f"{phys.sim.sim_ns / _NS:.3f} s: is it hung?")
             if phys.first_reply_us is None:          # freewheel until PX4 answers
                 if now >= next_wall:
-                    next_wall = now + FREEWHEEL_WALL_S
+                    next_wall = now + (step_wall if realtime else FREEWHEEL_WALL_S)
                     self._send_step(freewheel=True)
             elif realtime:
                 if now >= next_wall:
