@@ -5,8 +5,8 @@
 
 PX4 connects (TCP; `simulator_mavlink start -c PORT`). Until its first HIL_ACTUATOR_CONTROLS
 the server freewheels: one PX4 step with the motors stopped per FREEWHEEL_WALL_S of wall time
-(per step period in real time),
-because PX4 cannot answer before its estimator and logger run, and they need sim time to move.
+(per step period in real time), because PX4 cannot answer before its estimator and logger run,
+and they need sim time to move.
 Then:
 - lockstep (default): one step per reply that answers the last step sent (bridge/px4_physics.py
   tells); a reply that never comes within `stall_s` wall seconds makes the server step anyway
