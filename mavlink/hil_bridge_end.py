@@ -103,14 +103,21 @@ class HilBridgeEnd:
     is_owner = True
 
     def __init__(self, host: str = "127.0.0.1", port: int = 4560, *, datagram: bool = False,
-                 origin=(0, 0, 0), attach_timeout_s: float = 15.0):
-        self.name = f"{'udp' if datagram else 'tcp'}://{host}:{port}"
-        self.listener = HilListener(host, port, datagram)
-        self.addr = self.listener.addr
+                 origin=(0, 0, 0), attach_timeout_s: float = 15.0, serial: str | None = None):
         self.codec = make_codec(BRIDGE_SYSID, BRIDGE_COMPID)
+        if serial:      # a serial line (hil_serial.py): contact at the FC's first message
+            from .hil_serial import open_serial
+            self.listener = None
+            self.channel = open_serial(serial, make_codec(BRIDGE_SYSID, BRIDGE_COMPID))
+            self.name = self.channel.name
+            self.addr = serial
+        else:
+            self.name = f"{'udp' if datagram else 'tcp'}://{host}:{port}"
+            self.listener = HilListener(host, port, datagram)
+            self.addr = self.listener.addr
+            self.channel = None
         self.encoder = SensorEncoder(self.codec, origin)
         self.pwm_decoder = PwmDecoder()
-        self.channel = None
         self.attach_timeout_s = attach_timeout_s
         self.words = [0] * 8
         self.sensors = _Sensors(self)
@@ -134,7 +141,7 @@ class HilBridgeEnd:
             if self.channel is not None and self.channel.eof:
                 raise HilPeerLost(f"the FC disconnected ({self.channel.error})")
             if time.monotonic() > deadline:
-                raise HilPeerLost(f"no FC connected to {self.name} within "
+                raise HilPeerLost(f"no FC {'spoke on' if self.listener is None else 'connected to'} {self.name} within "
                                   f"{self.attach_timeout_s:g} s: start `silbridge fc --transport "
                                   f"{'udp' if self.listener.datagram else 'tcp'}`")
         return self.channel
@@ -255,7 +262,8 @@ class HilBridgeEnd:
     def close(self) -> None:
         if self.channel is not None:
             self.channel.close()
-        self.listener.close()
+        if self.listener is not None:
+            self.listener.close()
         self.closed = True
 
     def unlink(self) -> None:

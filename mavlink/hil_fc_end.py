@@ -116,10 +116,15 @@ class HilFcEnd:
 
     def __init__(self, host: str = "127.0.0.1", port: int = 4560, *, datagram: bool = False,
                  connect_timeout_s: float = 10.0, stall_s: float = 3.0, pwm_min_us: int = 1000,
-                 on_bad_input=None):
-        self.name = f"{'udp' if datagram else 'tcp'}://{host}:{port}"
+                 on_bad_input=None, serial: str | None = None):
         self.codec = make_codec(FC_SYSID, FC_COMPID)
-        self.channel = connect(host, port, datagram, self.codec, connect_timeout_s)
+        if serial:      # a serial line (hil_serial.py): the same messages, framed on it
+            from .hil_serial import open_serial
+            self.channel = open_serial(serial, self.codec)
+            self.name = self.channel.name
+        else:
+            self.name = f"{'udp' if datagram else 'tcp'}://{host}:{port}"
+            self.channel = connect(host, port, datagram, self.codec, connect_timeout_s)
         self.decoder = SensorDecoder()
         self.encoder = PwmEncoder(self.codec)
         self.words = [0] * 8
@@ -265,8 +270,11 @@ class HilFcEnd:
             self._last_beat = now
             c = self.codec
             mode = self.encoder.last_mode
+            # SB_PID again: over a serial line the hello may have gone out before the
+            # bridge was reading.
             try:
-                self.channel.send([c.heartbeat_encode(2, 0, mode, 0, 4).pack(c)])
+                self.channel.send([c.heartbeat_encode(2, 0, mode, 0, 4).pack(c),
+                                   c.named_value_int_encode(0, b"SB_PID", pid()).pack(c)])
             except HilPeerLost:
                 pass
 

@@ -12,6 +12,7 @@ from .hil_bridge_end import HilBridgeEnd
 from .hil_channel import DEFAULT_PORT, parse_addr
 from .hil_errors import HilConfigError
 from .hil_fc_end import HilFcEnd
+from .hil_serial import is_serial
 
 TRANSPORTS = ("shm", "udp", "tcp")
 
@@ -28,7 +29,11 @@ def check_transport(name: str) -> str:
 def open_bridge_end(transport: str, addr: str | None = None, *, origin=(0, 0, 0),
                     default_port: int = DEFAULT_PORT,
                     attach_timeout_s: float = 15.0) -> HilBridgeEnd:
-    """Listen for the FC. addr 'HOST:PORT' (default 127.0.0.1:default_port; port 0 = any)."""
+    """Listen for the FC. addr 'HOST:PORT' (default 127.0.0.1:default_port; port 0 = any), or
+    'serial:/dev/PORT:BAUD' for a serial line (either transport name)."""
+    check_transport(transport)
+    if is_serial(addr):
+        return HilBridgeEnd(serial=addr, origin=origin, attach_timeout_s=attach_timeout_s)
     host, port = parse_addr(addr)
     if not addr:
         port = default_port
@@ -38,7 +43,11 @@ def open_bridge_end(transport: str, addr: str | None = None, *, origin=(0, 0, 0)
 
 def open_fc_end(transport: str, addr: str | None = None, *, connect_timeout_s: float = 10.0,
                 stall_s: float = 3.0, pwm_min_us: int = 1000, on_bad_input=None) -> HilFcEnd:
-    """Connect to the simulator at addr (default 127.0.0.1:4560)."""
+    """Connect to the simulator at addr (default 127.0.0.1:4560), or open 'serial:PATH:BAUD'."""
+    if is_serial(addr):
+        check_transport(transport)
+        return HilFcEnd(serial=addr, connect_timeout_s=connect_timeout_s, stall_s=stall_s,
+                        pwm_min_us=pwm_min_us, on_bad_input=on_bad_input)
     host, port = parse_addr(addr)
     return HilFcEnd(host, port, datagram=check_transport(transport) == "udp",
                     connect_timeout_s=connect_timeout_s, stall_s=stall_s, pwm_min_us=pwm_min_us,

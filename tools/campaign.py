@@ -42,10 +42,11 @@ class RunSpec:
     variant: str = "full"         # ablation label
     keep_log: bool = True         # False: delete the log once its metrics are computed
     windows: tuple = ((0.0, 10.0), (10.0, 30.0), (30.0, 120.0), (90.0, 120.0))
-    fc: str = "ours"              # ours | ardupilot (ArduCopter SITL over the JSON interface)
+    fc: str = "ours"              # ours | ardupilot (ArduCopter SITL, JSON) | px4 (MAVLink HIL)
     sitl: str | None = None       # fc == ardupilot: the arducopter binary
     sitl_speedup: float = 50.0    # fc == ardupilot: SITL --speedup
     viz_hz: float = 0.0           # the log's viewable channels (off in campaigns: their cost)
+    px4: str | None = None        # fc == px4: the px4 SITL binary (etc/ beside its bin/)
 
 
 @dataclass
@@ -60,7 +61,7 @@ class RunResult:
 def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_seed: int = 1,
                imu_hz=None, params=(), features_off=(), variant="full", windows=None,
                keep_logs: str = "all", fc: str = "ours", sitl: str | None = None,
-               sitl_speedup: float = 50.0, viz_hz: float = 0.0):
+               sitl_speedup: float = 50.0, viz_hz: float = 0.0, px4: str | None = None):
     """One RunSpec per (scenario, run). keep_logs: all | first (run 0 of each
     scenario, enough for the report's traces) | none. A 120 s log is ~45 MB."""
     if keep_logs not in ("all", "first", "none"):
@@ -74,7 +75,7 @@ def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_s
                                  duration_s=duration_s, log_path=str(log), imu_hz=imu_hz,
                                  params=tuple(params), features_off=tuple(features_off),
                                  variant=variant, fc=fc, sitl=sitl,
-                                 sitl_speedup=sitl_speedup, viz_hz=viz_hz,
+                                 sitl_speedup=sitl_speedup, viz_hz=viz_hz, px4=px4,
                                  windows=windows or RunSpec.windows,
                                  keep_log=keep_logs == "all" or (keep_logs == "first"
                                                                  and i == 0)))
@@ -96,6 +97,14 @@ def run_one(spec: RunSpec) -> RunResult:
                                 duration_s=spec.duration_s, log_path=spec.log_path,
                                 binary=spec.sitl, imu_hz=spec.imu_hz, params=dict(spec.params),
                                 speedup=spec.sitl_speedup)
+        return _result_from_log(spec, summary, t0)
+    if spec.fc == "px4":
+        from .px4_flight import fly_px4
+        from .sitl_px4 import find_px4
+        binary, etc = find_px4(spec.px4)
+        summary = fly_px4(scenario=spec.scenario, seed=spec.seed, duration_s=spec.duration_s,
+                          log_path=spec.log_path, binary=binary, etc=etc, imu_hz=spec.imu_hz,
+                          params=dict(spec.params))
         return _result_from_log(spec, summary, t0)
     opts = FlightOptions(scenario=spec.scenario, duration_s=spec.duration_s, lockstep=True,
                          processes=1, imu_hz=spec.imu_hz, seed=spec.seed,

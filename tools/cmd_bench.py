@@ -49,18 +49,22 @@ def add_campaign_arguments(p) -> None:
 
 def add_arguments(p) -> None:
     add_campaign_arguments(p)
-    p.add_argument("--fc", default="ours", metavar="ours|ardupilot|ours,ardupilot",
+    p.add_argument("--fc", default="ours", metavar="ours|ardupilot|px4|ours,ardupilot,px4",
                    help="flight controller(s): our SIL FC (default), ArduCopter SITL over its "
-                        "JSON interface, or both side by side in one Table 1")
+                        "JSON interface, PX4 SITL over MAVLink HIL, or several side by side in "
+                        "one Table 1")
     p.add_argument("--sitl", default=None, metavar="PATH",
                    help="--fc ardupilot: the arducopter binary (default: $SILBRIDGE_ARDUCOPTER, "
                         "then `arducopter` on PATH)")
     p.add_argument("--sitl-speedup", type=float, default=50.0, metavar="X",
                    help="--fc ardupilot: SITL --speedup (lockstep either way; higher only lets "
                         "SITL run ahead of the wall clock, default 50)")
+    p.add_argument("--px4", default=None, metavar="PATH",
+                   help="--fc px4: the px4 SITL binary, etc/ beside its bin/ (default: "
+                        "$SILBRIDGE_PX4, then `px4` on PATH)")
 
 
-FC_LABELS = {"ardupilot": "ArduCopter"}
+FC_LABELS = {"ardupilot": "ArduCopter", "px4": "PX4"}
 
 
 def _group_name(r) -> str:
@@ -71,9 +75,10 @@ def _group_name(r) -> str:
 
 def fc_choice(text: str) -> list[str]:
     fcs = [f.strip().lower() for f in text.split(",") if f.strip()]
-    bad = [f for f in fcs if f not in ("ours", "ardupilot")]
+    bad = [f for f in fcs if f not in ("ours", "ardupilot", "px4")]
     if not fcs or bad:
-        raise CampaignError(f"--fc wants ours, ardupilot or ours,ardupilot, not {text!r}")
+        raise CampaignError(f"--fc wants ours, ardupilot, px4 or a list such as "
+                            f"ours,ardupilot,px4, not {text!r}")
     return list(dict.fromkeys(fcs))
 
 
@@ -106,6 +111,20 @@ def run(args) -> int:
                 if args.json:
                     print(json.dumps({"skipped": True, "fc": "ardupilot", "reason": note}))
                 return 0
+    px4 = None
+    if "px4" in fcs:
+        from .sitl_px4 import HOW_TO_GET as PX4_HOW_TO_GET
+        from .sitl_px4 import find_px4
+        found = find_px4(args.px4)
+        px4 = found[0] if found else None
+        if px4 is None:
+            fcs.remove("px4")
+            note = f"bench --fc px4 skipped: {PX4_HOW_TO_GET}"
+            print(note, file=sys.stderr)
+            if not fcs:
+                if args.json:
+                    print(json.dumps({"skipped": True, "fc": "px4", "reason": note}))
+                return 0
     out_dir = Path(args.out)
     specs = []
     for fc in fcs:
@@ -113,8 +132,8 @@ def run(args) -> int:
         specs += make_specs(scenarios, args.runs, args.duration, out_dir, base_seed=args.seed,
                             imu_hz=args.imu_hz, params=params if fc == "ours" else (),
                             windows=windows, keep_logs=args.keep_logs, fc=fc, sitl=sitl,
-                            sitl_speedup=args.sitl_speedup, viz_hz=args.viz_hz,
-                            variant="full" if fc == "ours" else "ardupilot")
+                            sitl_speedup=args.sitl_speedup, viz_hz=args.viz_hz, px4=px4,
+                            variant="full" if fc == "ours" else fc)
     t0 = time.monotonic()
     results = run_campaign(specs, jobs=args.jobs, executor=args.executor,
                            ray_address=args.ray_address)
@@ -143,8 +162,9 @@ def run(args) -> int:
                   "sim_s_total": sum(r.summary.get("sim_s", 0.0) for r in results)})
     if STOP.requested:
         table.update(stopped)
-    ap = FC_LABELS["ardupilot"]
-    md = markdown(table).replace(f" {ap} ours |", f" {ap} |")   # "S1 ArduCopter", not "... ours"
+    md = markdown(table)
+    for label in FC_LABELS.values():      # "S1 ArduCopter", "S1 PX4", not "... ours"
+        md = md.replace(f" {label} ours |", f" {label} |")
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "table1.md").write_text(md + "\n")
     (out_dir / "table1.json").write_text(json.dumps(table, indent=2) + "\n")

@@ -17,9 +17,10 @@ HELP = "the simulator program: JSBSim + sensors, publishes to the SIL FC over sh
 
 def add_arguments(p) -> None:
     add_flight_arguments(p, processes=False)
-    p.add_argument("--fc", choices=("ours", "ardupilot"), default="ours",
-                   help="the flight controller: our SIL FC over the segment (default), or "
-                        "ArduPilot SITL (`arducopter --model JSON`) over its JSON interface")
+    p.add_argument("--fc", choices=("ours", "ardupilot", "px4"), default="ours",
+                   help="the flight controller: our SIL FC over the segment (default), "
+                        "ArduPilot SITL (`arducopter --model JSON`) over its JSON interface, or "
+                        "PX4 (SITL or a board in HIL) over its MAVLink simulator link")
     p.add_argument("--sitl-address", default=None, metavar="HOST:PORT",
                    help="--fc ardupilot: where SITL sends servo packets (default "
                         "127.0.0.1:9002, SITL instance 0; instance N uses 9002 + 10 N)")
@@ -28,6 +29,9 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     if args.fc == "ardupilot":
         return _run_ardupilot(args)
+    if args.fc == "px4":
+        from .px4_bridge import run_px4_bridge
+        return run_px4_bridge(args)
     opts = options_from_args(args)
     opts.instance = opts.instance or "silbridge"
     out = (lambda s: print(s, file=sys.stderr)) if args.json else print

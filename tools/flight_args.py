@@ -62,8 +62,9 @@ def add_transport_arguments(p: argparse.ArgumentParser, *, listen: bool) -> None
                         "over UDP or TCP (PX4 convention: the simulator listens)")
     where = ("listen on HOST:PORT (bridge default 127.0.0.1:4560; `fly` picks a free port)"
              if listen else "the simulator's HOST:PORT (default 127.0.0.1:4560)")
-    p.add_argument("--hil-addr", default=None, metavar="HOST:PORT",
-                   help=f"udp/tcp only: {where}")
+    p.add_argument("--hil-addr", default=None, metavar="HOST:PORT|serial:DEV:BAUD",
+                   help=f"udp/tcp only: {where}; or a serial line, e.g. "
+                        f"serial:/dev/ttyACM0:921600")
 
 
 def add_fc_arguments(p: argparse.ArgumentParser) -> None:

@@ -30,6 +30,8 @@ def bridge_segment(transport: str, name: str, sim, *, hil_addr: str | None = Non
 
 
 def bridge_address(seg) -> str:
+    if isinstance(seg.addr, str):       # serial:/dev/...:BAUD
+        return seg.addr
     host, port = seg.addr[0], seg.addr[1]
     return f"{host}:{port}"
 

@@ -79,7 +79,7 @@ def test_bench_with_a_missing_binary_is_a_user_error(tmp_path):
 
 
 def test_bench_refuses_an_unknown_fc(tmp_path):
-    p = subprocess.run(CLI + ["bench", "--fc", "px4", "--out", str(tmp_path)],
+    p = subprocess.run(CLI + ["bench", "--fc", "betaflight", "--out", str(tmp_path)],
                        capture_output=True, text=True, timeout=60)
     assert p.returncode == 2 and "--fc wants" in p.stderr
 

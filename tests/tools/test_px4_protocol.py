@@ -1,0 +1,217 @@
+"""PX4's simulator contract, pinned by a recorded real exchange (no PX4 needed).
+
+tests/tools/px4_exchange.json holds the first frames between PX4 v1.15.4 SITL and the bridge
+(tests/tools/record_px4_exchange.py wrote it): PX4's opening messages, the freewheel start and
+lockstep replies. These tests check the recording against the contract (so a re-recording
+with another PX4 that breaks it shows up), then replay PX4's side of it, message for message,
+against the real bridge server on a real Simulator over TCP, and check the bridge behaves as
+it did with PX4: freewheels until the first reply, then steps exactly once per reply.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mav
+
+from silbridge.bridge.px4_physics import Px4Physics
+from silbridge.bridge.px4_server import Px4HilServer
+from silbridge.bridge.scenario import load_scenario
+from silbridge.bridge.simulator import Simulator
+from silbridge.mavlink import px4_hil
+from silbridge.mavlink.hil_channel import make_codec
+
+FIXTURE = Path(__file__).with_name("px4_exchange.json")
+
+
+def _decode(hexes) -> list:
+    codec = mav.MAVLink(None)
+    codec.robust_parsing = True
+    out = []
+    for direction, h in hexes:
+        msgs = codec.parse_buffer(bytes.fromhex(h)) or []
+        assert len(msgs) == 1, f"one frame per event, got {msgs}"
+        out.append((direction, msgs[0]))
+    return out
+
+
+@pytest.fixture(scope="module")
+def recording():
+    data = json.loads(FIXTURE.read_text())
+    return data, _decode(data["events"])
+
+
+def test_px4_opens_with_its_state_interval_request_and_a_heartbeat(recording):
+    _, events = recording
+    first_tx = next(i for i, (d, _) in enumerate(events) if d == "tx")
+    opening = [m for d, m in events[:first_tx] if d == "rx"]
+    kinds = {m.get_type(): m for m in opening}
+    assert kinds["HEARTBEAT"].autopilot == px4_hil.PX4_AUTOPILOT
+    cmd = kinds["COMMAND_LONG"]
+    assert cmd.command == px4_hil.CMD_SET_MESSAGE_INTERVAL
+    assert cmd.param1 == px4_hil.MSG_HIL_STATE_QUATERNION and cmd.param2 == 5000
+
+
+def test_freewheel_then_one_reply_per_step_on_the_sim_clock(recording):
+    data, events = recording
+    step_us = data["step_us"]
+    sensor_times = []
+    replies = []          # (reply time_usec, newest HIL_SENSOR time before it, sensors so far)
+    for d, m in events:
+        t = m.get_type()
+        if d == "tx" and t == "HIL_SENSOR":
+            sensor_times.append(m.time_usec)
+        elif d == "rx" and t == "HIL_ACTUATOR_CONTROLS":
+            replies.append((m.time_usec, sensor_times[-1], len(sensor_times), m))
+    # The sim clock: one PX4 step per HIL_SENSOR, time_usec from the first step on.
+    assert sensor_times == [step_us * (k + 1) for k in range(len(sensor_times))]
+    # Freewheel: PX4 answers only after several steps of sim time (its estimator and logger
+    # must run first); the bridge kept sending meanwhile.
+    first = replies[0]
+    assert first[2] == data["freewheel_steps"] >= 5
+    # Lockstep: every reply carries the newest sensor time (PX4's clock) and the lockstep
+    # flag; after the first, exactly one new HIL_SENSOR between consecutive replies.
+    assert len(replies) >= 50
+    for t_reply, t_sensor, _, m in replies:
+        assert t_reply == t_sensor
+        assert m.flags & px4_hil.FLAG_LOCKSTEP
+        assert not m.mode & px4_hil.MODE_ARMED and max(m.controls) == 0.0   # disarmed
+    counts = [r[2] for r in replies]
+    assert all(b - a == 1 for a, b in zip(counts, counts[1:]))
+
+
+def test_bridge_sensors_use_px4_field_groups_and_interval(recording):
+    _, events = recording
+    sensors = [m for d, m in events if d == "tx" and m.get_type() == "HIL_SENSOR"]
+    groups = (px4_hil.FIELDS_ACCEL, px4_hil.FIELDS_GYRO, px4_hil.FIELDS_MAG,
+              px4_hil.FIELDS_BARO)
+    assert (px4_hil.FIELDS_ACCEL, px4_hil.FIELDS_GYRO, px4_hil.FIELDS_MAG,
+            px4_hil.FIELDS_BARO) == (0b111, 0b111000, 0b111000000, 0b1101000000000)
+    for m in sensors:
+        assert m.id == 0
+        bits = m.fields_updated
+        for g in groups:             # PX4 takes a group only when all its bits are set
+            assert bits & g in (0, g)
+        assert bits & (px4_hil.FIELDS_ACCEL | px4_hil.FIELDS_GYRO) == 0b111111
+        assert abs(m.zacc + 9.8) < 0.5                     # on the ground
+    baro = [m for m in sensors if m.fields_updated & px4_hil.FIELDS_BARO]
+    mag = [m for m in sensors if m.fields_updated & px4_hil.FIELDS_MAG]
+    span_s = (sensors[-1].time_usec - sensors[0].time_usec) / 1e6
+    assert len(baro) == pytest.approx(100 * span_s, abs=2)     # the scenario's 100 Hz
+    assert len(mag) == pytest.approx(100 * span_s, abs=2)
+    # Not perfectly noise-free (PX4 flags a frozen sensor STALE and refuses to arm); the
+    # pressure is on the 1/128 hPa grid HIL_SENSOR carries exactly (mavlink/hil_quant.py).
+    assert len({m.abs_pressure for m in baro}) >= 4
+    assert len({m.xmag for m in mag}) > len(mag) // 2
+    for m in baro:
+        assert m.pressure_alt == pytest.approx(px4_hil.pressure_altitude_m(m.abs_pressure * 100),
+                                               abs=0.01)
+    states = [m.time_usec for d, m in events if d == "tx"
+              and m.get_type() == "HIL_STATE_QUATERNION"]
+    assert all(b - a >= 5000 for a, b in zip(states, states[1:]))   # PX4's 5000 us request
+    gps = [m for d, m in events if d == "tx" and m.get_type() == "HIL_GPS"]
+    assert gps and all(m.fix_type == 3 and m.satellites_visible >= 6 and m.eph <= 300
+                       for m in gps)
+
+
+class _FakePx4(threading.Thread):
+    """PX4's side of the recording replayed: each recorded PX4 message goes out once the bridge
+    has sent as many HIL_SENSOR as PX4 had received before it; HIL_ACTUATOR_CONTROLS carry
+    the newest sensor time received, as PX4's clock would."""
+
+    def __init__(self, port: int, events):
+        super().__init__(daemon=True)
+        self.port = port
+        self.script = []
+        seen = 0
+        for d, m in events:
+            if d == "tx" and m.get_type() == "HIL_SENSOR":
+                seen += 1
+            elif d == "rx":
+                self.script.append((seen, m))
+        self.codec = mav.MAVLink(None, srcSystem=1, srcComponent=1)
+        self.sensor_times: list = []
+        self.error = None
+
+    def run(self) -> None:
+        try:
+            s = socket.create_connection(("127.0.0.1", self.port), timeout=10)
+            s.settimeout(10)
+            rx = mav.MAVLink(None)
+            rx.robust_parsing = True
+            for need, m in self.script:
+                while len(self.sensor_times) < need:
+                    for got in rx.parse_buffer(s.recv(65536)) or []:
+                        if got.get_type() == "HIL_SENSOR":
+                            self.sensor_times.append(got.time_usec)
+                if m.get_type() == "HIL_ACTUATOR_CONTROLS":
+                    m.time_usec = self.sensor_times[-1]
+                s.sendall(m.pack(self.codec))
+            while s.recv(65536):      # until the bridge closes the link
+                pass
+            s.close()
+        except Exception as e:  # noqa: BLE001 - reported by the test
+            self.error = repr(e)
+
+
+def test_bridge_freewheels_then_steps_once_per_replayed_px4_reply(recording):
+    data, events = recording
+    phys = Px4Physics(lambda: Simulator(load_scenario("S1", seed=1)), make_codec(1, 51))
+    replies = sum(1 for d, m in events if d == "rx"
+                  and m.get_type() == "HIL_ACTUATOR_CONTROLS")
+    with Px4HilServer(phys, ("127.0.0.1", 0)) as server:
+        fake = _FakePx4(server.address[1], events)
+        fake.start()
+        res = server.serve(30.0, connect_timeout_s=10.0, stall_s=0.5, idle_timeout_s=10.0,
+                           stop=lambda: phys.replies >= replies)
+    fake.join(10)
+    assert fake.error is None
+    st = res.stats
+    assert st["replies"] == replies and st["unanswered_steps"] == 0
+    assert st["px4_lockstep_flag"] is True
+    # The freewheel lasted until the first reply: the fake sends it after the recorded number
+    # of steps; on a busy machine the bridge may have freewheeled a few more meanwhile, and
+    # then that first reply is stale (it answers an older step: no step is made for it).
+    assert st["freewheel_steps"] >= data["freewheel_steps"]
+    assert st["stale_replies"] <= 1 and st["answered"] + st["stale_replies"] == replies
+    # Then exactly one step per answer.
+    assert st["px4_steps"] == st["freewheel_steps"] + st["answered"]
+    assert st["state_interval_us"] == 5000
+    assert fake.sensor_times == [4000 * (k + 1) for k in range(len(fake.sensor_times))]
+    assert res.startup_check == {} or res.startup_check["passed"]
+
+
+def test_controls_map_px4_outputs_to_our_motors():
+    # PX4 output i (rotor i of 10016_none_iris) drives our motor i + 1; 0..1 -> 1000..2000 us.
+    assert px4_hil.controls_to_pwm_us([0.0, 0.25, 0.5, 1.0] + [0.0] * 12) == [1000, 1250, 1500,
+                                                                                2000]
+    assert px4_hil.controls_to_pwm_us([-0.5, 1.5, float("nan"), 0.1] + [0.0] * 12) == \
+        [1000, 2000, 1000, 1100]
+
+
+def _env_without_px4() -> dict:
+    env = dict(os.environ)
+    env.pop("SILBRIDGE_PX4", None)
+    env["PATH"] = f"{Path(sys.executable).parent}:/usr/bin:/bin"
+    return env
+
+
+def test_bench_fc_px4_without_a_binary_says_how_to_build_one(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools", "bench", "--fc", "px4",
+                        "--scenarios", "S1", "--runs", "1", "--json", "--out", str(tmp_path)],
+                       capture_output=True, text=True, timeout=60, env=_env_without_px4())
+    assert p.returncode == 0
+    assert json.loads(p.stdout)["skipped"] is True
+    assert "SILBRIDGE_PX4" in p.stderr and "make px4_sitl_default" in p.stderr
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools", "bench", "--fc", "px4",
+                        "--px4", str(tmp_path / "nope"), "--out", str(tmp_path)],
+                       capture_output=True, text=True, timeout=60, env=_env_without_px4())
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    assert "make px4_sitl_default" in p.stderr
