@@ -46,6 +46,7 @@ from .nav_wp import WaypointNav
 from .param_store import CoreParamStore
 from .pilot import PilotInput
 from .pos_est import PositionEstimator
+from .rc_input import ModeSwitch, RcConfig
 from .snapshot import build_snapshot
 from .vehicle_commands import GcsCommands
 from .vehicle_nav import NavHelpers
@@ -82,6 +83,8 @@ class Vehicle(NavHelpers, GcsCommands):
         self.failsafe = FailsafeMonitor()
         self.mission = MissionExecutor()
         self.pilot = PilotInput()
+        self.pilot.configure(RcConfig.from_params(self.store.host))
+        self.mode_switch = ModeSwitch()
         self.messages: collections.deque = collections.deque(maxlen=200)   # (sim_ns, sev, text)
         # state read by modes, failsafes and telemetry
         self.armed = False
@@ -158,6 +161,7 @@ class Vehicle(NavHelpers, GcsCommands):
         self.battery.update(self.status["pwm_us"] if self.armed else (), dt_s)
         self.failsafe.check(self)
         self._radio_failsafe()
+        self._read_mode_switch()
         self.landing = False
         if self.armed:
             self.mode.run(self, dt_s)
@@ -175,6 +179,7 @@ class Vehicle(NavHelpers, GcsCommands):
         self.wp.sp = self._wp_speeds(self.speed_override_m_s)
         self.battery.configure(self.cfg.battery, self.cfg.pwm_min_us, self.cfg.pwm_max_us)
         self.est.configure(self.cfg.pos_tc_s, self.cfg.vel_tc_s, self.cfg.gps_delay_s)
+        self.pilot.configure(RcConfig.from_params(self.store.host))
 
     def _read_core(self) -> None:
         st = self.core.status()
