@@ -89,11 +89,13 @@ class SitlVehicle:
             dst.append(line)
 
     def _wait_checks(self, timeout_s: float) -> bool:
-        """True once the bridge reports its last start-up check passed."""
+        """True once the bridge reports its last start-up check and none of them failed
+        ("drops" is printed last, after "rates": a failed rates check must retry too)."""
         end = time.monotonic() + timeout_s
         while time.monotonic() < end:
-            if any(line.startswith("check drops") for line in self.out_lines + self.err_lines):
-                return True
+            lines = self.out_lines + self.err_lines
+            if any(line.startswith("check drops") for line in lines):
+                return not any(line.startswith("check ") and "FAILED" in line for line in lines)
             if self.proc.poll() is not None:
                 return False
             time.sleep(0.05)
