@@ -50,7 +50,9 @@ def _set(c, name, value, ptype):
 
 
 def _with_rc(c, chans, mtype, cond, timeout_s=20.0, send=None):
-    """Keep RC override (and our heartbeat) going every 0.2 s until mtype matches."""
+    """Keep RC override (and our heartbeat) going every 0.2 s until mtype matches (only
+    messages that arrive from now on count)."""
+    c.drain()
     end = time.monotonic() + timeout_s
     while time.monotonic() < end:
         c.send(mav.MAVLink_rc_channels_override_message(1, 1, *chans))
@@ -124,17 +126,16 @@ def test_rc_calibration_decides_the_arming_throttle_check(vehicle):
         c.send(mav.MAVLink_command_long_message(1, 1, arm, 0, 1, 0, 0, 0, 0, 0, 0))
 
     # 1100 us is 7 % throttle with RC3_MIN 1000 and RC3_DZ 30: too high to arm in STABILIZE
-    c.drain()
     m = _with_rc(c, _rc(ch3=1100), "STATUSTEXT", lambda m: "Throttle too high" in m.text,
                  send=send_arm)
     assert m is not None
     # calibrated: 1100 us is the bottom of the stick, so arming is accepted
     _set(c, "RC3_MIN", 1100, mav.MAV_PARAM_TYPE_INT16)
-    c.drain()
     ack = _with_rc(c, _rc(ch3=1100), "COMMAND_ACK",
                    lambda m: m.command == arm and m.result == mav.MAV_RESULT_ACCEPTED,
                    send=send_arm)
     assert ack is not None
+    c.drain()
     c.send(mav.MAVLink_command_long_message(1, 1, arm, 0, 0, 0, 0, 0, 0, 0, 0))
     assert wait_for(c, "HEARTBEAT", lambda m: not m.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED,
                     timeout_s=10) is not None
@@ -155,4 +156,5 @@ def test_fltmode_channel_switches_modes(vehicle):
     m = _with_rc(c, _rc(ch3=1000, ch8=1900), "STATUSTEXT",
                  lambda m: "mode change failed" in m.text.lower())
     assert m is not None
+    c.drain()
     assert wait_for(c, "HEARTBEAT", timeout_s=5).custom_mode == 0
