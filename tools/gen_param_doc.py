@@ -44,7 +44,12 @@ def render() -> str:
         "",
         "Deliberate departures from ArduCopter defaults: `ATC_ANG_YAW_P` 0 (the paper's yaw "
         "rate damping; set > 0 for heading hold) and `MOT_SLEW_UP_TIME`/`MOT_SLEW_DN_TIME` "
-        "0.05 s (ArduCopter 0 = off) so the paper's slew limit acts by default.",
+        "0.05 s (ArduCopter 0 = off) so the paper's slew limit acts by default. The "
+        "ground-station block (indices 1000-2999) has ArduCopter 4.6.0's types and firmware "
+        "defaults, except the values ArduCopter SITL's copter.parm sets so QGroundControl's "
+        "setup pages show as done (`FRAME_CLASS` 1, `RC1..8_MIN/MAX` 1000/2000, "
+        "`INS_ACCOFFS_*` 0.001, `BATT_MONITOR` 4) and one simulated sensor of each kind "
+        "(the second and third compass, IMU and barometer ids are 0).",
         "",
         "| Index | Name | Type | Default | Min | Max | Unit | Where | Effect in SIL | Description |",
         "|---:|---|---|---:|---:|---:|---|---|---|---|",
