@@ -6,14 +6,17 @@ time, whatever the simulation speed). Sticks are normalised:
   roll  -1..1 (+ right), pitch -1..1 (+ stick back = nose up), yaw -1..1 (+ clockwise),
   throttle 0..1 (0.5 = centre).
 MANUAL_CONTROL: x forward (+1000 = stick forward), y right, z throttle 0..1000, r yaw.
-RC override: channels 1..4 = roll, pitch, throttle, yaw (ArduCopter's default RCMAP), PWM
-1000..2000 us; 0 and 65535 leave a channel as it was (UINT16_MAX "ignore" in MAVLink 2).
-ArduCopter's RC2 is reversed: a low pitch channel is stick forward.
+RC override: 16 channels; 0 and 65535 leave a channel as it was (UINT16_MAX "ignore" in
+MAVLink 2). The sticks come from the channels through the RC calibration and RCMAP_* of
+rc_input.py (``configure``; without it channels 1..4 = roll, pitch, throttle, yaw over
+1000..2000 us, no dead zone). A low pitch channel is stick forward, as in ArduCopter.
 """
 
 from __future__ import annotations
 
 import time
+
+from .rc_input import N_CHANNELS, RcConfig
 
 RC_MIN_US, RC_MID_US, RC_MAX_US = 1000.0, 1500.0, 2000.0
 
@@ -28,7 +31,12 @@ class PilotInput:
         self.roll = self.pitch = self.yaw = 0.0
         self.throttle = 0.0
         self.t_s: float | None = None           # arrival of the last input (wall clock)
-        self.channels_us = [1500, 1500, 1000, 1500, 1000, 1000, 1000, 1000]
+        self.channels_us = [1500, 1500, 1000, 1500] + [1000] * (N_CHANNELS - 4)
+        self.overridden = [False] * N_CHANNELS  # channel ever set by RC override
+        self.rc = RcConfig()
+
+    def configure(self, rc: RcConfig) -> None:
+        self.rc = rc
 
     def manual_control(self, x: int, y: int, z: int, r: int) -> None:
         # INT16_MAX marks an axis as unused (MAVLink): keep its last value
@@ -44,25 +52,30 @@ class PilotInput:
         self.t_s = self.clock()
 
     def rc_override(self, channels_us) -> None:
-        def norm(us):
-            return _clamp((us - RC_MID_US) / (RC_MAX_US - RC_MID_US), -1.0, 1.0)
-
         for i, us in enumerate(channels_us[:len(self.channels_us)]):
             if us not in (0, 65535) and RC_MIN_US - 200 <= us <= RC_MAX_US + 200:
                 self.channels_us[i] = int(us)
-        ch = self.channels_us
-        self.roll = norm(ch[0])
-        self.pitch = norm(ch[1])                # low = forward = nose down = negative
-        self.throttle = _clamp((ch[2] - RC_MIN_US) / (RC_MAX_US - RC_MIN_US), 0.0, 1.0)
-        self.yaw = norm(ch[3])
+                self.overridden[i] = True
+        # low pitch channel = forward = nose down = negative pitch
+        self.roll, self.pitch, self.yaw, self.throttle = self.rc.sticks(self.channels_us)
         self.t_s = self.clock()
+
+    def channel_fresh(self, i: int, timeout_s: float) -> bool:
+        """Channel i (0-based) came from RC override and the input is not stale."""
+        return self.overridden[i] and self.fresh(timeout_s)
+
+    def throttle_pwm(self) -> int | None:
+        """PWM of the throttle channel if RC override set it, else None."""
+        i = self.rc.throttle_ch - 1
+        return self.channels_us[i] if self.overridden[i] else None
 
     def _mirror_channels(self) -> None:
         """RC_CHANNELS telemetry shows manual-control sticks as the RC values they mean."""
-        self.channels_us[0] = int(RC_MID_US + 500.0 * self.roll)
-        self.channels_us[1] = int(RC_MID_US + 500.0 * self.pitch)
-        self.channels_us[2] = int(RC_MIN_US + 1000.0 * self.throttle)
-        self.channels_us[3] = int(RC_MID_US + 500.0 * self.yaw)
+        rc = self.rc
+        self.channels_us[rc.roll_ch - 1] = int(RC_MID_US + 500.0 * self.roll)
+        self.channels_us[rc.pitch_ch - 1] = int(RC_MID_US + 500.0 * self.pitch)
+        self.channels_us[rc.throttle_ch - 1] = int(RC_MIN_US + 1000.0 * self.throttle)
+        self.channels_us[rc.yaw_ch - 1] = int(RC_MID_US + 500.0 * self.yaw)
 
     def age_s(self) -> float | None:
         """Seconds since the last input; None if there never was one."""

@@ -11,7 +11,7 @@ for SYS_STATUS's PREARM_CHECK health bit, which MAVSDK reads as "armable".
   throttle low    : manual-throttle modes need the throttle stick down; ALT_HOLD-like modes
                     need it no higher than the centre dead zone (else it would climb at once)
   mode            : RTL, LAND, AUTO and BRAKE cannot be armed in (as ArduCopter by default)
-  battery         : no battery failsafe active
+  battery         : no battery failsafe active; at least BATT_ARM_VOLT and BATT_ARM_MAH left
   fence           : the geofence's own checks (fence.py), worded as AC_Fence's
 """
 
@@ -53,4 +53,9 @@ def prearm_failure(v) -> str | None:
         return "Arm: Throttle too high"
     if v.failsafe.batt_low or v.failsafe.batt_crit:
         return "PreArm: Battery low"
+    arm_v, arm_mah = v.store.host("BATT_ARM_VOLT"), v.store.host("BATT_ARM_MAH")
+    if arm_v > 0 and v.battery.voltage_v < arm_v:
+        return f"PreArm: Battery 1 below minimum arming voltage {arm_v:.2f}V"
+    if arm_mah > 0 and v.battery.remaining_mah < arm_mah:
+        return f"PreArm: Battery 1 below minimum arming capacity {arm_mah:.0f}mAh"
     return None

@@ -48,6 +48,7 @@ from .param_store import CoreParamStore
 from .pilot import PilotInput
 from .pos_est import PositionEstimator
 from .rally import RallyPoints
+from .rc_input import ModeSwitch, RcConfig
 from .snapshot import build_snapshot
 from .vehicle_commands import GcsCommands
 from .vehicle_nav import NavHelpers
@@ -89,6 +90,8 @@ class Vehicle(NavHelpers, GcsCommands):
         self.fence.configure(self.store.host)
         self.rally.configure(self.store.host)
         self.home_epoch = 0                 # +1 when home is announced (HOME_POSITION)
+        self.pilot.configure(RcConfig.from_params(self.store.host))
+        self.mode_switch = ModeSwitch()
         self.messages: collections.deque = collections.deque(maxlen=200)   # (sim_ns, sev, text)
         # state read by modes, failsafes and telemetry
         self.armed = False
@@ -166,6 +169,7 @@ class Vehicle(NavHelpers, GcsCommands):
         self.failsafe.check(self)
         self._radio_failsafe()
         self.fence.check(self)
+        self._read_mode_switch()
         self.landing = False
         if self.armed:
             self.mode.run(self, dt_s)
@@ -185,6 +189,7 @@ class Vehicle(NavHelpers, GcsCommands):
         self.est.configure(self.cfg.pos_tc_s, self.cfg.vel_tc_s, self.cfg.gps_delay_s)
         self.fence.configure(self.store.host)
         self.rally.configure(self.store.host)
+        self.pilot.configure(RcConfig.from_params(self.store.host))
 
     def _read_core(self) -> None:
         st = self.core.status()

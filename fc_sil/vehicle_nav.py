@@ -156,15 +156,31 @@ class NavHelpers:
             self.command_vertical(dt_s, self.alt_hold_m)
 
     def _radio_failsafe(self) -> None:
+        """Pilot input lost for RC_FS_TIMEOUT, or the throttle channel below FS_THR_VALUE
+        (rc_input.py), while a manual mode flies: FS_THR_ENABLE's action (0 = none)."""
         age = self.pilot.age_s()
-        if age is None or age <= self.cfg.rc_fs_timeout_s:
+        thr_us = self.pilot.throttle_pwm()
+        low = thr_us is not None and thr_us < self.pilot.rc.fs_thr_value_us
+        if age is None or (age <= self.cfg.rc_fs_timeout_s and not low):
             self._rc_fs = False
             return
         if self._rc_fs:
             return
         self._rc_fs = True
-        if self.armed and self.airborne and self.mode.number in (
+        action = self.pilot.rc.fs_thr_action()
+        if action is not None and self.armed and self.airborne and self.mode.number in (
                 CopterMode.STABILIZE, CopterMode.ALT_HOLD, CopterMode.LOITER):
             self.statustext(mav.MAV_SEVERITY_CRITICAL, "Radio Failsafe")
-            target = CopterMode.RTL if self.home_set and self.position_ok() else CopterMode.LAND
-            self.set_mode_internal(target, "radio failsafe")
+            if action == CopterMode.RTL and not (self.home_set and self.position_ok()):
+                action = CopterMode.LAND
+            self.set_mode_internal(action, "radio failsafe")
+
+    def _read_mode_switch(self) -> None:
+        """FLTMODE_CH's switch position selects FLTMODE1..6 (rc_input.py), once per move."""
+        mode = self.mode_switch.update(
+            self.pilot.rc, self.pilot.channels_us,
+            lambda i: self.pilot.channel_fresh(i, self.cfg.rc_fs_timeout_s), self.sim_ns * 1e-9)
+        if mode is not None and mode != self.mode.number:
+            reason = self._change_mode(mode)
+            if reason:
+                self.statustext(mav.MAV_SEVERITY_WARNING, reason)

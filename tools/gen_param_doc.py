@@ -13,7 +13,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from silbridge.fc_sil.params import ABLATION_FEATURES, DEF_PATH, FEATURES, PARAMS
+from silbridge.fc_sil.params import ABLATION_FEATURES, BY_NAME, DEF_PATH, FEATURES, PARAMS
+from silbridge.tools.param_effects import effect, gcs_params
 
 DOC_PATH = Path(__file__).resolve().parent.parent / "docs" / "params.md"
 
@@ -36,19 +37,27 @@ def render() -> str:
         "ArduCopter 4.5 names and defaults where ArduCopter has the parameter; `SB_` names for "
         "the paper's own features. The index is the permanent slot (never renumbered). "
         "*Where*: `core` parameters live in the C core's struct (validated and effective at "
-        "once, filters recomputed); `host` parameters are kept by the Python runtime.",
+        "once, filters recomputed); `host` parameters are kept by the Python runtime. "
+        "*Effect in SIL*: `acts` with the code that reads it, or `no effect in SIL` (accepted, "
+        "range-checked, served over MAVLink and saved in `.parm` files, as ArduCopter keeps "
+        "it; nothing in a simulator uses it: serial ports, sensor ids, LEDs, ...).",
         "",
         "Deliberate departures from ArduCopter defaults: `ATC_ANG_YAW_P` 0 (the paper's yaw "
         "rate damping; set > 0 for heading hold) and `MOT_SLEW_UP_TIME`/`MOT_SLEW_DN_TIME` "
-        "0.05 s (ArduCopter 0 = off) so the paper's slew limit acts by default.",
+        "0.05 s (ArduCopter 0 = off) so the paper's slew limit acts by default. The "
+        "ground-station block (indices 1000-2999) has ArduCopter 4.6.0's types and firmware "
+        "defaults, except the values ArduCopter SITL's copter.parm sets so QGroundControl's "
+        "setup pages show as done (`FRAME_CLASS` 1, `RC1..8_MIN/MAX` 1000/2000, "
+        "`INS_ACCOFFS_*` 0.001, `BATT_MONITOR` 4) and one simulated sensor of each kind "
+        "(the second and third compass, IMU and barometer ids are 0).",
         "",
-        "| Index | Name | Type | Default | Min | Max | Unit | Where | Description |",
-        "|---:|---|---|---:|---:|---:|---|---|---|",
+        "| Index | Name | Type | Default | Min | Max | Unit | Where | Effect in SIL | Description |",
+        "|---:|---|---|---:|---:|---:|---|---|---|---|",
     ]
     for p in PARAMS:
         out.append(f"| {p.index} | `{p.name}` | {p.type} | {_num(p.default, p.type)} | "
                    f"{_num(p.min, p.type)} | {_num(p.max, p.type)} | {_cell(p.unit)} | "
-                   f"{'host' if p.host else 'core'} | {_cell(p.text)} |")
+                   f"{'host' if p.host else 'core'} | {effect(p)} | {_cell(p.text)} |")
     out += [
         "",
         "## Stabilisation features (ablation switches)",
@@ -61,8 +70,27 @@ def render() -> str:
     ]
     for name, param in FEATURES.items():
         out.append(f"| `{name}` | `{param}` | {'yes' if name in ABLATION_FEATURES else 'no'} |")
+    out += _gcs_section()
     out.append("")
     return "\n".join(out)
+
+
+def _gcs_section() -> list[str]:
+    """The parameters QGroundControl and MAVProxy read (docs/gcs_params.txt) and their fate."""
+    gcs = gcs_params()
+    read = [n for n, src in gcs.items() if any(s.startswith(("qgc:", "mavproxy:")) for s in src)]
+    acts = sum(1 for n in gcs if n in BY_NAME and not effect(BY_NAME[n]).startswith("no"))
+    out = ["", "## Parameters ground stations read", "",
+           f"{len(read)} ArduCopter parameters are read by name by QGroundControl's ArduPilot "
+           "setup pages (airframe, radio, flight modes, sensors, power, safety, tuning, camera) "
+           "and plan managers, and by MAVProxy's modules (`docs/gcs_params.txt` names the files); "
+           f"with RCn_DZ for the RC calibration the list has {len(gcs)}. "
+           f"{sum(1 for n in gcs if n in BY_NAME)} are declared here, {acts} of them act in SIL.",
+           "", "| Name | Effect in SIL | Read by |", "|---|---|---|"]
+    for name, sources in gcs.items():
+        fx = effect(BY_NAME[name]) if name in BY_NAME else "not declared"
+        out.append(f"| `{name}` | {fx} | {', '.join(s.split('/')[-1] for s in sources)} |")
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:

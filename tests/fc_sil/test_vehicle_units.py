@@ -159,7 +159,7 @@ def test_pilot_sticks_from_manual_control_and_rc_override():
 def test_param_store_lists_every_declared_parameter_with_its_type():
     store = CoreParamStore(FlightCore())
     assert list(store.names()) == [p.name for p in P.PARAMS]
-    assert store.get("DISARM_DELAY") == (10, 4)          # INT16, reported as an integer
+    assert store.get("DISARM_DELAY") == (10, 2)          # INT8, reported as an integer
     v, t = store.get("ATC_RAT_RLL_P")
     assert t == 9 and v == pytest.approx(0.135)
     with pytest.raises(KeyError):
