@@ -59,6 +59,7 @@ import numpy as np
 
 from silbridge.shm.records import Kind
 
+from .fc_target import FC_TARGET_DTYPE, TARGET_CHANNEL, CommandLog, TargetFeed
 from .mcap_log import TIMING_CHANNEL, TIMING_DTYPE, LogWriter
 
 STATUS_CHANNEL = "/fc/status"
@@ -107,9 +108,12 @@ class ArduPilotLogSink:
     """
 
     def __init__(self, path, *, metadata: dict, target: AttitudeTarget, duration_s: float,
-                 command=None):
+                 command=None, target_feed: TargetFeed | None = None):
         self.writer = LogWriter(path, metadata=metadata)
         self.writer.declare(TIMING_CHANNEL, TIMING_DTYPE)
+        self.writer.declare(TARGET_CHANNEL, FC_TARGET_DTYPE)
+        self.target_feed = target_feed
+        self.commands = CommandLog(self.writer)
         # One struct pack per row (LogWriter.pack): numpy field stores cost ~1 us each.
         self.writer.declare(STATUS_CHANNEL, AP_STATUS_DTYPE)
         self.target = target
@@ -163,6 +167,12 @@ class ArduPilotLogSink:
 
     def step(self, recs, pwm, sim) -> None:
         self.last_sim_ns = sim.sim_ns
+        feed = self.target_feed
+        if feed is not None:
+            if self.t0_ns is not None:
+                feed.drain(self.writer, self.t0_ns, self.t0_ns + self.duration_ns)
+            elif sim.sim_ns % 1_000_000_000 == 0:
+                feed.trim()
         applied_ns = int(pwm["sim_ns"][0])    # when this packet's PWM took effect
         in_window = self._in_window(applied_ns)
         if not in_window and not self._holding(applied_ns):
@@ -190,6 +200,8 @@ class ArduPilotLogSink:
         p["imu_sim_ns"] -= t0
         self.writer.write_records(p)
         self.writer.pack(STATUS_CHANNEL, row[0] - t0, *row[1:])
+        alt = self.command.command[3] if self.command is not None else math.nan
+        self.commands.write(row[0] - t0, row[1], row[2], row[3], alt)
 
     def timing(self, applied_ns: int, rx_wall_ns: int, done_wall_ns: int, tx_wall_ns: int,
                period_ns: int) -> None:
