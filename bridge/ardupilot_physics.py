@@ -135,26 +135,31 @@ class ArduPilotPhysics:
         self.steps += 1
         raw = recs.tobytes()
         # Contract order: the step's IMU samples first, then GT_ATT, then GT_NAV.
-        n = 0
-        sums = [0.0] * 6
-        while _KIND.unpack_from(raw, n * RECORD_SIZE)[0] == _IMU_KIND:
-            for j, v in enumerate(_IMU.unpack_from(raw, n * RECORD_SIZE)):
-                sums[j] += v
+        n = off = 0
+        a0 = a1 = a2 = g0 = g1 = g2 = 0.0
+        while _KIND.unpack_from(raw, off)[0] == _IMU_KIND:
+            x0, x1, x2, y0, y1, y2 = _IMU.unpack_from(raw, off)
+            a0 += x0
+            a1 += x1
+            a2 += x2
+            g0 += y0
+            g1 += y1
+            g2 += y2
             n += 1
-        if _KIND.unpack_from(raw, n * RECORD_SIZE)[0] != _GT_ATT_KIND or \
-                _KIND.unpack_from(raw, (n + 1) * RECORD_SIZE)[0] != _GT_NAV_KIND:
+            off += RECORD_SIZE
+        if _KIND.unpack_from(raw, off)[0] != _GT_ATT_KIND or \
+                _KIND.unpack_from(raw, off + RECORD_SIZE)[0] != _GT_NAV_KIND:
             raise RuntimeError("Simulator.step records out of contract order (IMU*, GT_ATT, "
                                "GT_NAV): bridge/simulator.py and this reader disagree")
-        att = _GT_ATT.unpack_from(raw, n * RECORD_SIZE)
-        nav = _GT_NAV.unpack_from(raw, (n + 1) * RECORD_SIZE)
-        q = att[0:4]
+        att = _GT_ATT.unpack_from(raw, off)
+        nav = _GT_NAV.unpack_from(raw, off + RECORD_SIZE)
         if n:
-            accel = [s / n for s in sums[0:3]]
-            gyro = [s / n for s in sums[3:6]]
+            k = 1.0 / n
+            imu = (g0 * k, g1 * k, g2 * k, a0 * k, a1 * k, a2 * k)
         else:   # an IMU slower than the physics: truth this step (its sample comes later)
-            accel, gyro = att[7:10], att[4:7]
-        reply = apj.encode_state(sim.sim_ns / _NS, gyro, accel, nav[0:3], nav[3:6], q,
-                                 euler_from_quat(*q))
+            imu = (*att[4:7], *att[7:10])
+        reply = apj.encode_values((sim.sim_ns / _NS, *imu, *nav[0:3],
+                                   *euler_from_quat(*att[0:4]), *att[0:4], *nav[3:6]))
         if self.sink is not None:
             p = self._pwm
             p["seq"] = self.steps - 1

@@ -86,12 +86,18 @@ class ClockReader(threading.Thread):
                     return
                 time.sleep(0.05)
         try:
-            # ATTITUDE at 20 Hz of sim time: a message with time_boot_ms whatever SRn_* say.
             self.codec.file = _Out(sock)
-            self.codec.command_long_send(1, 1, mav.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
-                                         mav.MAVLINK_MSG_ID_ATTITUDE, 50_000, 0, 0, 0, 0, 0)
-            sock.settimeout(0.2)
+            sock.settimeout(0.1)
+            asked = 0.0
             while not self._halt.is_set():
+                now = time.monotonic()
+                if not self.samples and now - asked > 0.5:
+                    # ATTITUDE at 20 Hz of sim time: a message with time_boot_ms whatever
+                    # SRn_* say; asked again until it comes (SITL may not listen yet).
+                    self.codec.command_long_send(1, 1, mav.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
+                                                 mav.MAVLINK_MSG_ID_ATTITUDE, 50_000,
+                                                 0, 0, 0, 0, 0)
+                    asked = now
                 try:
                     data = sock.recv(65536)
                 except socket.timeout:
@@ -193,7 +199,8 @@ def _profile(rows, skip_s: float, span_s: float) -> dict:
             "sitl_us": {"median": float(np.median(sitl)), "mean": float(sitl.mean())}}
 
 
-def measure_json_idle(binary: str, *, skip_s: float, span_s: float) -> dict:
+def measure_json_idle(binary: str, *, skip_s: float, span_s: float,
+                      spin_us: float | None = None) -> dict:
     sc = load_scenario("S1")
     phys = ArduPilotPhysics(lambda: Simulator(sc))
     prof = phys.sink = _Profile(phys)
@@ -204,14 +211,15 @@ def measure_json_idle(binary: str, *, skip_s: float, span_s: float) -> dict:
     reader = ClockReader(inst)
     reader.start()
     try:
-        server.serve(skip_s + span_s, connect_timeout_s=60.0,
+        server.serve(skip_s + span_s, connect_timeout_s=60.0, spin_us=spin_us,
                      stop=lambda: proc.poll() is not None or reader.error is not None)
     finally:
         reader.stop()
         stop_sitl(proc)
         server.close()
         shutil.rmtree(workdir, ignore_errors=True)
-    return _profile(prof.rows, skip_s, span_s) | {"model": "JSON", "speedup": 1000}
+    return _profile(prof.rows, skip_s, span_s) | {"model": "JSON", "speedup": 1000,
+                                                   "spin_us": spin_us}
 
 
 def measure_bench(binary: str, *, flight_s: float) -> dict:
