@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import shutil
 import socket
@@ -130,12 +131,15 @@ class _Out:
 
 
 def _factor(samples, skip_s: float, span_s: float) -> float:
-    """sim / wall between the first sample at or after skip_s and the first after +span_s."""
+    """sim / wall from the first sample at or after skip_s to the first span_s of sim later."""
     t = [s for s in samples if s[1] >= skip_s]
-    end = [s for s in t if s[1] >= skip_s + span_s]
-    if not t or not end:
+    if not t:
         return float("nan")
-    (w0, s0), (w1, s1) = t[0], end[0]
+    w0, s0 = t[0]
+    end = [s for s in t if s[1] >= s0 + span_s]
+    if not end:
+        return float("nan")
+    w1, s1 = end[0]
     return (s1 - s0) / max(w1 - w0, 1e-9)
 
 
@@ -157,10 +161,11 @@ def measure_reference(binary: str, *, skip_s: float, span_s: float) -> dict:
     reader.start()
     try:
         deadline = time.monotonic() + 120.0
-        while reader.sim_s() < skip_s + span_s and time.monotonic() < deadline:
+        while math.isnan(_factor(reader.samples, skip_s, span_s)) and \
+                time.monotonic() < deadline:
             if proc.poll() is not None or reader.error:
                 raise SitlError(f"reference SITL stopped: {reader.error or proc.returncode}")
-            time.sleep(0.05)
+            time.sleep(0.2)
     finally:
         reader.stop()
         stop_sitl(proc)
