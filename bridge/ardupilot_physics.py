@@ -52,6 +52,11 @@ _IMU = struct.Struct("<24x6f")          # accel_frd_m_s2[3], gyro_frd_rad_s[3]
 _GT_ATT = struct.Struct("<24x10f")      # q_wxyz[4], rates_frd_rad_s[3], specific_force[3]
 _GT_NAV = struct.Struct("<24x3d3f")     # pos_ned_m[3], vel_ned_m_s[3]
 _IMU_KIND, _GT_ATT_KIND, _GT_NAV_KIND = int(Kind.IMU), int(Kind.GT_ATT), int(Kind.GT_NAV)
+# PWM_DTYPE: header (kind, flags, seq, sim_ns, wall_ns), pwm_us[8], channel_count, armed,
+# reserved0, fc_step_seq, imu_sim_ns, 8 bytes of padding.
+_PWM = struct.Struct("<HHIqq8HBBHIq8x")
+_PWM_KIND = int(Kind.PWM)
+assert _PWM.size == RECORD_SIZE == PWM_DTYPE.itemsize
 
 
 def euler_from_quat(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:
@@ -84,9 +89,10 @@ class ArduPilotPhysics:
         self.resets = 0
         self.sitl_rate_hz: int | None = None
         self.channels: int | None = None
-        self._pwm = np.zeros(1, dtype=PWM_DTYPE)
-        self._pwm["kind"] = Kind.PWM
-        self._pwm["channel_count"] = apj.MOTORS
+        # The step's PWM record for the sink, filled by one struct pack (numpy field
+        # stores cost ~1-5 us each); _pwm is a numpy view of the same bytes.
+        self._pwm_buf = bytearray(RECORD_SIZE)
+        self._pwm = np.frombuffer(self._pwm_buf, dtype=PWM_DTYPE)
         self._rx_ns = 0            # arrival of the packet being handled [wall ns]
         self._prev_rx_ns = 0       # arrival of the previous stepped packet
         self._timing = None        # the last step's timing, until its reply is sent
@@ -161,15 +167,12 @@ class ArduPilotPhysics:
         reply = apj.encode_values((sim.sim_ns / _NS, *imu, *nav[0:3],
                                    *euler_from_quat(*att[0:4]), *att[0:4], *nav[3:6]))
         if self.sink is not None:
-            p = self._pwm
-            p["seq"] = self.steps - 1
-            p["sim_ns"] = applied_ns
-            p["wall_ns"] = time.monotonic_ns()
-            p["pwm_us"][0, :apj.MOTORS] = motors
-            p["armed"] = 1 if max(motors) > apj.PWM_MIN_US else 0
-            p["fc_step_seq"] = pkt.frame_count & 0xFFFFFFFF
-            p["imu_sim_ns"] = applied_ns
-            self.sink.step(recs, p, sim)
+            m0, m1, m2, m3 = motors
+            _PWM.pack_into(self._pwm_buf, 0, _PWM_KIND, 0, self.steps - 1, applied_ns,
+                           time.monotonic_ns(), int(m0), int(m1), int(m2), int(m3), 0, 0, 0, 0,
+                           apj.MOTORS, 1 if max(motors) > apj.PWM_MIN_US else 0, 0,
+                           pkt.frame_count & 0xFFFFFFFF, applied_ns)
+            self.sink.step(recs, self._pwm, sim)
             rx = self._rx_ns
             period = rx - self._prev_rx_ns if self._prev_rx_ns and rx else 0
             self._prev_rx_ns = rx
