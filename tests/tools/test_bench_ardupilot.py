@@ -361,6 +361,8 @@ def test_arducopter_arms_takes_off_and_hovers_30_s(tmp_path):
     alt_m = -nav["pos_ned_m"][nav["sim_ns"] >= 20e9][:, 2]
     assert abs(alt_m.mean() - 10.0) < 1.0        # thrust 0.5 holds the take-off altitude
     assert math.isfinite(r.metrics["att_rms_deg"]) and r.metrics["att_rms_deg"] < 5.0
+    for k in ("att_rms_cmd_deg", "att_p95_cmd_deg", "att_rms_target_deg", "att_p95_target_deg"):
+        assert math.isfinite(r.metrics[k]) and r.metrics[k] < 5.0, k
     # The level command went out once ArduCopter reported the take-off altitude, and it
     # answered with its own target; the JSON link was timed.
     assert r.summary["forwarding_started_by"] == "altitude" and r.summary["setpoints_sent"] > 100
