@@ -2,17 +2,20 @@
 
     python -m silbridge.tools.ardupilot_speed [--sitl PATH] [--span 30] [--json]
 
-Three runs of the same arducopter binary, one after the other, each with the
+Four runs of the same arducopter binary, one after the other, each with the
 same defaults file (tools/sitl_ardupilot.py sitl_defaults: SIM_RATE_HZ 1000,
 so both physics give it the same number of frames per simulated second):
 
 - reference: `--model quad --speedup 1000`, SITL's built-in physics;
 - json_idle: `--model JSON` answered by our physics (ArduPilotPhysics on the
   UDP server), nothing logged, so the figure is the JSON path alone;
+- json_floor: `--model JSON` answered at once with a vehicle at rest and no
+  physics at all: what SITL's frame and the two UDP hops cost, the ceiling
+  of any physics behind the JSON interface on this machine;
 - bench: one `silbridge bench --fc ardupilot` run of S1 (boot, arming,
   take-off, `--flight` seconds of hover), logged as the benchmark logs it.
 
-The first two idle on the ground, disarmed, from boot; the speed is the sim
+The first three idle on the ground, disarmed, from boot; the speed is the sim
 time elapsed over wall time between sim time `--skip` and `--skip + --span`
 (the boot's first seconds, parameter loading, are left out). The reference's
 sim time is read from its MAVLink time_boot_ms, ours from the physics clock.
@@ -41,6 +44,7 @@ import time
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
+from silbridge.bridge import ardupilot_json as apj
 from silbridge.bridge.ardupilot_json import sitl_port
 from silbridge.bridge.ardupilot_physics import ArduPilotPhysics
 from silbridge.bridge.ardupilot_server import JsonPhysicsServer
@@ -227,6 +231,56 @@ def measure_json_idle(binary: str, *, skip_s: float, span_s: float,
                                                    "spin_us": spin_us}
 
 
+class _Clock:
+    sim_ns = 0
+    crashed = False
+    crash_reason = ""
+
+
+class _NoPhysics:
+    """The floor: answers each servo packet at once with a vehicle at rest, the clock
+    advancing 1 ms per packet, no physics and no decoding. What SITL and the two UDP hops
+    cost per frame on this machine, whatever the physics does."""
+
+    def __init__(self):
+        self.sim = _Clock()
+        self.rows: list = []
+        self._rx = 0
+
+    def handle(self, data, src, rx_wall_ns: int) -> bytes:
+        self.sim.sim_ns += 1_000_000
+        self._rx = rx_wall_ns
+        return apj.encode_values((self.sim.sim_ns / _NS, 0.0, 0.0, 0.0, 0.0, 0.0, -9.80665,
+                                  0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0,
+                                  0.0, 0.0, 0.0))
+
+    def sent(self, tx_wall_ns: int) -> None:
+        self.rows.append((self.sim.sim_ns, self._rx, self._rx, tx_wall_ns, 0))
+
+    def stats(self) -> dict:
+        return {}
+
+
+def measure_json_floor(binary: str, *, skip_s: float, span_s: float) -> dict:
+    sc = load_scenario("S1")
+    phys = _NoPhysics()
+    workdir, defaults = _workdir_and_defaults(Simulator(sc), 1000.0)
+    inst = pick_instance()
+    server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(inst)))
+    proc = start_sitl(binary, inst, workdir, speedup=1000, home=sc.home, defaults_path=defaults)
+    reader = ClockReader(inst)
+    reader.start()
+    try:
+        server.serve(skip_s + span_s, connect_timeout_s=60.0,
+                     stop=lambda: proc.poll() is not None or reader.error is not None)
+    finally:
+        reader.stop()
+        stop_sitl(proc)
+        server.close()
+        shutil.rmtree(workdir, ignore_errors=True)
+    return _profile(phys.rows, skip_s, span_s) | {"model": "JSON, no physics"}
+
+
 def measure_bench(binary: str, *, flight_s: float) -> dict:
     from .ardupilot_flight import fly_ardupilot
     out = tempfile.mkdtemp(prefix="silbridge-speed-bench-")
@@ -263,10 +317,12 @@ def main(argv=None) -> int:
         return 2
     ref = measure_reference(binary, skip_s=args.skip, span_s=args.span)
     idle = measure_json_idle(binary, skip_s=args.skip, span_s=args.span)
+    floor = measure_json_floor(binary, skip_s=args.skip, span_s=args.span)
     bench = measure_bench(binary, flight_s=args.flight) if args.flight > 0 else None
     r = ref["realtime_factor"]
     out = {"binary": binary, "skip_s": args.skip, "span_s": args.span, "reference": ref,
-           "json_idle": idle, "ratio_json_idle": idle["realtime_factor"] / r}
+           "json_idle": idle, "ratio_json_idle": idle["realtime_factor"] / r,
+           "json_floor": floor, "ratio_json_floor": floor["realtime_factor"] / r}
     if bench is not None:
         out.update(bench=bench, ratio_bench=bench["realtime_factor"] / r)
     if args.json:
@@ -280,6 +336,8 @@ def main(argv=None) -> int:
         print(f"    per servo packet: ours {idle['ours_us']['median']:.1f} us "
               f"(step {idle['ours_step_us']['median']:.1f} us), SITL + link "
               f"{idle['sitl_us']['median']:.1f} us (medians)")
+    print(f"  no physics at all (the JSON link's floor): {floor['realtime_factor']:7.1f}x "
+          f"real time  ratio {out['ratio_json_floor']:.2f}")
     if bench is not None:
         print(f"  our physics, bench run S1 (logged):        {bench['realtime_factor']:7.1f}x "
               f"real time  ratio {out['ratio_bench']:.2f}")

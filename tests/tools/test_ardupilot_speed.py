@@ -26,6 +26,7 @@ def test_speed_tool_prints_both_speeds_and_the_ratio():
     assert ref > 0 and ours > 0 and math.isfinite(out["ratio_json_idle"])
     assert out["ratio_json_idle"] == pytest.approx(ours / ref)
     assert out["json_idle"]["packets"] >= 2900          # 3 s at 1 kHz, one per frame
+    assert out["json_floor"]["realtime_factor"] > 0 and math.isfinite(out["ratio_json_floor"])
     for key in ("ours_us", "ours_step_us", "sitl_us"):
         assert out["json_idle"][key]["median"] > 0
 
