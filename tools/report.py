@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .att_scoring import command_at, target_at
 from .table1 import ROWS, scenario_key
 
 
@@ -61,12 +62,15 @@ def trace_plots(log, name: str, out_dir: Path, windows) -> list[str]:
     if st is not None and gt is not None and len(st) and len(gt):
         idx = np.clip(np.searchsorted(gt["sim_ns"], st["sim_ns"]), 0, len(gt) - 1)
         roll, pitch = _quat_to_roll_pitch(gt["q_wxyz"][idx])
-        tgt = st["att_target_rad"]
-        err = np.degrees(np.hypot(roll - tgt[:, 0], pitch - tgt[:, 1]))
+        series = []
+        for label, ref in (("vs command", command_at(log, st["sim_ns"], st)),
+                           ("vs FC target", target_at(log, st["sim_ns"], st))):
+            if ref is not None:
+                series.append((np.degrees(np.hypot(roll - ref[:, 0], pitch - ref[:, 1])), label))
         files.append(_save_trace(
-            plt, out_dir, f"{name}_attitude_error.png", st["sim_ns"] / 1e9, [(err, None)],
+            plt, out_dir, f"{name}_attitude_error.png", st["sim_ns"] / 1e9, series,
             ylabel="attitude error [deg]", span=windows[2], span_label="analysis window",
-            title=f"{name}: roll/pitch error vs commanded (shaped) target, run 0"))
+            title=f"{name}: roll/pitch error vs the command and the FC's own target, run 0"))
     pwm = ch.get("/pwm")
     if pwm is not None and len(pwm):
         us = pwm["pwm_us"]
