@@ -52,6 +52,11 @@ _IMU = struct.Struct("<24x6f")          # accel_frd_m_s2[3], gyro_frd_rad_s[3]
 _GT_ATT = struct.Struct("<24x10f")      # q_wxyz[4], rates_frd_rad_s[3], specific_force[3]
 _GT_NAV = struct.Struct("<24x3d3f")     # pos_ned_m[3], vel_ned_m_s[3]
 _IMU_KIND, _GT_ATT_KIND, _GT_NAV_KIND = int(Kind.IMU), int(Kind.GT_ATT), int(Kind.GT_NAV)
+# PWM_DTYPE: header (kind, flags, seq, sim_ns, wall_ns), pwm_us[8], channel_count, armed,
+# reserved0, fc_step_seq, imu_sim_ns, 8 bytes of padding.
+_PWM = struct.Struct("<HHIqq8HBBHIq8x")
+_PWM_KIND = int(Kind.PWM)
+assert _PWM.size == RECORD_SIZE == PWM_DTYPE.itemsize
 
 
 def euler_from_quat(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:
@@ -84,9 +89,10 @@ class ArduPilotPhysics:
         self.resets = 0
         self.sitl_rate_hz: int | None = None
         self.channels: int | None = None
-        self._pwm = np.zeros(1, dtype=PWM_DTYPE)
-        self._pwm["kind"] = Kind.PWM
-        self._pwm["channel_count"] = apj.MOTORS
+        # The step's PWM record for the sink, filled by one struct pack (numpy field
+        # stores cost ~1-5 us each); _pwm is a numpy view of the same bytes.
+        self._pwm_buf = bytearray(RECORD_SIZE)
+        self._pwm = np.frombuffer(self._pwm_buf, dtype=PWM_DTYPE)
         self._rx_ns = 0            # arrival of the packet being handled [wall ns]
         self._prev_rx_ns = 0       # arrival of the previous stepped packet
         self._timing = None        # the last step's timing, until its reply is sent
@@ -135,36 +141,38 @@ class ArduPilotPhysics:
         self.steps += 1
         raw = recs.tobytes()
         # Contract order: the step's IMU samples first, then GT_ATT, then GT_NAV.
-        n = 0
-        sums = [0.0] * 6
-        while _KIND.unpack_from(raw, n * RECORD_SIZE)[0] == _IMU_KIND:
-            for j, v in enumerate(_IMU.unpack_from(raw, n * RECORD_SIZE)):
-                sums[j] += v
+        n = off = 0
+        a0 = a1 = a2 = g0 = g1 = g2 = 0.0
+        while _KIND.unpack_from(raw, off)[0] == _IMU_KIND:
+            x0, x1, x2, y0, y1, y2 = _IMU.unpack_from(raw, off)
+            a0 += x0
+            a1 += x1
+            a2 += x2
+            g0 += y0
+            g1 += y1
+            g2 += y2
             n += 1
-        if _KIND.unpack_from(raw, n * RECORD_SIZE)[0] != _GT_ATT_KIND or \
-                _KIND.unpack_from(raw, (n + 1) * RECORD_SIZE)[0] != _GT_NAV_KIND:
+            off += RECORD_SIZE
+        if _KIND.unpack_from(raw, off)[0] != _GT_ATT_KIND or \
+                _KIND.unpack_from(raw, off + RECORD_SIZE)[0] != _GT_NAV_KIND:
             raise RuntimeError("Simulator.step records out of contract order (IMU*, GT_ATT, "
                                "GT_NAV): bridge/simulator.py and this reader disagree")
-        att = _GT_ATT.unpack_from(raw, n * RECORD_SIZE)
-        nav = _GT_NAV.unpack_from(raw, (n + 1) * RECORD_SIZE)
-        q = att[0:4]
+        att = _GT_ATT.unpack_from(raw, off)
+        nav = _GT_NAV.unpack_from(raw, off + RECORD_SIZE)
         if n:
-            accel = [s / n for s in sums[0:3]]
-            gyro = [s / n for s in sums[3:6]]
+            k = 1.0 / n
+            imu = (g0 * k, g1 * k, g2 * k, a0 * k, a1 * k, a2 * k)
         else:   # an IMU slower than the physics: truth this step (its sample comes later)
-            accel, gyro = att[7:10], att[4:7]
-        reply = apj.encode_state(sim.sim_ns / _NS, gyro, accel, nav[0:3], nav[3:6], q,
-                                 euler_from_quat(*q))
+            imu = (*att[4:7], *att[7:10])
+        reply = apj.encode_values((sim.sim_ns / _NS, *imu, *nav[0:3],
+                                   *euler_from_quat(*att[0:4]), *att[0:4], *nav[3:6]))
         if self.sink is not None:
-            p = self._pwm
-            p["seq"] = self.steps - 1
-            p["sim_ns"] = applied_ns
-            p["wall_ns"] = time.monotonic_ns()
-            p["pwm_us"][0, :apj.MOTORS] = motors
-            p["armed"] = 1 if max(motors) > apj.PWM_MIN_US else 0
-            p["fc_step_seq"] = pkt.frame_count & 0xFFFFFFFF
-            p["imu_sim_ns"] = applied_ns
-            self.sink.step(recs, p, sim)
+            m0, m1, m2, m3 = motors
+            _PWM.pack_into(self._pwm_buf, 0, _PWM_KIND, 0, self.steps - 1, applied_ns,
+                           time.monotonic_ns(), int(m0), int(m1), int(m2), int(m3), 0, 0, 0, 0,
+                           apj.MOTORS, 1 if max(motors) > apj.PWM_MIN_US else 0, 0,
+                           pkt.frame_count & 0xFFFFFFFF, applied_ns)
+            self.sink.step(recs, self._pwm, sim)
             rx = self._rx_ns
             period = rx - self._prev_rx_ns if self._prev_rx_ns and rx else 0
             self._prev_rx_ns = rx

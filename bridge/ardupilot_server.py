@@ -13,6 +13,7 @@ their own timeout and raise a user-facing error saying what to check.
 
 from __future__ import annotations
 
+import select
 import socket
 import time
 from dataclasses import dataclass, field
@@ -21,6 +22,7 @@ from .ardupilot_json import ArduPilotProtocolError
 from .runner_errors import BridgeError
 
 _NS = 1_000_000_000
+SPIN_US = 0.0   # see JsonPhysicsServer.serve
 
 
 class SitlLost(BridgeError):
@@ -74,19 +76,40 @@ class JsonPhysicsServer:
         self.close()
 
     def serve(self, duration_s: float, *, connect_timeout_s: float = 120.0,
-              idle_timeout_s: float = 10.0, stop=None, poll_s: float = 0.2) -> JsonRunResult:
-        """Answer servo packets until duration_s of sim time; see the module text."""
+              idle_timeout_s: float = 10.0, stop=None, poll_s: float = 0.2,
+              spin_us: float | None = None) -> JsonRunResult:
+        """Answer servo packets until duration_s of sim time; see the module text.
+
+        spin_us: after each reply, poll the socket without sleeping for up to this long
+        before blocking (default SPIN_US). SITL answers within some tens of microseconds;
+        a blocked receiver pays a wake-up per packet, which on a VM costs as much as the
+        physics step. 0 blocks at once (the polite choice on a machine short of cores).
+        """
         phys = self.physics
         sock = self.sock
-        sock.settimeout(poll_s)
+        sock.setblocking(False)     # recvfrom never sleeps; select() does the waiting
+        spin_ns = int((SPIN_US if spin_us is None else spin_us) * 1000)
+        recv = sock.recvfrom
+        mono_ns = time.monotonic_ns
         end_ns = int(round(duration_s * _NS))
         t0 = time.monotonic()
         last_rx = None
         stopped_by = "duration"
         while phys.sim.sim_ns < end_ns:
             try:
-                data, src = sock.recvfrom(512)
-            except socket.timeout:
+                data, src = recv(512)
+            except BlockingIOError:
+                data = None
+                if spin_ns and last_rx is not None:
+                    give_up = mono_ns() + spin_ns
+                    while data is None and mono_ns() < give_up:
+                        try:
+                            data, src = recv(512)
+                        except BlockingIOError:
+                            pass
+            if data is None:
+                if select.select([sock], [], [], poll_s)[0]:
+                    continue
                 now = time.monotonic()
                 if stop is not None and stop():
                     stopped_by = "stop"
@@ -98,14 +121,14 @@ class JsonPhysicsServer:
                         "--model JSON` (its instance N sends to port 9002 + 10 N)") from None
                 if last_rx is not None and now - last_rx > idle_timeout_s:
                     raise SitlLost(
-                        f"ArduPilot SITL stopped sending servo packets for {idle_timeout_s:g} "
-                        f"s at sim time {phys.sim.sim_ns / _NS:.3f} s: did it crash or was it "
-                        "stopped? Check its console output") from None
+                        f"ArduPilot SITL stopped sending servo packets for "
+                        f"{idle_timeout_s:g} s at sim time {phys.sim.sim_ns / _NS:.3f} s: "
+                        "did it crash or was it stopped? Check its console output") from None
                 continue
-            rx_ns = time.monotonic_ns()
+            rx_ns = mono_ns()
             last_rx = rx_ns * 1e-9
             sock.sendto(phys.handle(data, src, rx_ns), src)
-            phys.sent(time.monotonic_ns())
+            phys.sent(mono_ns())
             if phys.sim.crashed:
                 stopped_by = "crash"
                 break

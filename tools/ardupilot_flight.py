@@ -27,6 +27,7 @@ from silbridge.bridge.simulator import Simulator
 
 from .ardupilot_log import ArduPilotLogSink, AttitudeTarget
 from .ardupilot_setpoints import SetpointForwarder
+from .fc_target import TargetFeed
 from .sitl_ardupilot import (
     MavlinkDriver,
     SitlError,
@@ -116,6 +117,7 @@ def fly_ardupilot(*, scenario: str, seed, duration_s: float, log_path: str, bina
     """One ArduCopter run: boot, arm, take off, hold for duration_s; log from take-off."""
     sc, make_sim = _factory(scenario, seed, imu_hz)
     target = AttitudeTarget()
+    feed = TargetFeed()
     workdir = tempfile.mkdtemp(prefix="silbridge-sitl-")
     instance = pick_instance()
     notes = []
@@ -128,12 +130,13 @@ def fly_ardupilot(*, scenario: str, seed, duration_s: float, log_path: str, bina
     driver = MavlinkDriver(instance, takeoff_alt_m=sc.takeoff_alt_m,
                            sim_time_s=lambda: phys.sim.sim_ns / _NS,
                            on_takeoff=lambda: hooks.takeoff_accepted(), target=target,
-                           on_takeoff_sent=lambda: hooks.takeoff_sent(phys.sim.sim_ns))
+                           on_takeoff_sent=lambda: hooks.takeoff_sent(phys.sim.sim_ns),
+                           target_feed=feed, sim_ns=lambda: phys.sim.sim_ns)
     forwarder = SetpointForwarder(sc, sim.dt_ns, math.radians(sc.home.heading_deg),
                                   send=driver.send_attitude_target,
                                   reported_alt_m=driver.reported_alt_m)
     sink = ArduPilotLogSink(log_path, metadata=meta, target=target, duration_s=duration_s,
-                            command=forwarder)
+                            command=forwarder, target_feed=feed)
     hooks = phys.sink = BenchStepHooks(forwarder, sink)
     server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(instance)))
     proc = None
@@ -189,8 +192,10 @@ def _metadata(sc, sim, physics_hz, duration_s, defaults, binary, speedup) -> dic
             "duration_s": duration_s, "seed": sc.seed, "transport": "ardupilot-json",
             "processes": 2, "mode": "lockstep", "features_off": [], "fc": "ardupilot",
             "sitl_speedup": speedup,
-            # What two channels mean in this log (tools/ardupilot_log.py, docs/logs.md).
+            # What the channels mean in this log (tools/ardupilot_log.py, docs/logs.md).
             "att_target": "scenario command sent to ArduCopter (SET_ATTITUDE_TARGET)",
+            "command": "/setpoint: the command forwarded, on the log clock",
+            "fc_target": "/fc/target: ArduCopter's ATTITUDE_TARGET, stamped time_boot_ms",
             "timing": "JSON link, bridge side: imu_wall_ns = servo packet arrival, "
                       "consume_wall_ns = physics step done, pwm_wall_ns = reply sent",
         },

@@ -125,6 +125,8 @@ def _result_from_log(spec: RunSpec, summary: dict, t0: float) -> RunResult:
     problems = check_log(log)
     w = spec.windows
     metrics = compute_metrics(log, Windows(warmup=w[0], transient=w[1], analysis=w[2], yaw=w[3]))
+    # Not from the log: how fast the run went (table1.json's realtime_factor, mean per row).
+    metrics["realtime_factor"] = float(summary.get("realtime_factor", float("nan")))
     del log
     if not spec.keep_log:
         os.unlink(spec.log_path)

@@ -10,7 +10,7 @@ from pathlib import Path
 from .campaign import CampaignError, make_specs, run_campaign
 from .flight_args import parse_params
 from .report import write_report
-from .table1 import aggregate, markdown, scenario_key
+from .table1 import SCORING_ROWS, aggregate, markdown, scenario_key
 
 HELP = "run the paper's benchmark campaign (S1..S4, N runs) and print Table 1"
 
@@ -163,18 +163,24 @@ def run(args) -> int:
     if STOP.requested:
         table.update(stopped)
     md = markdown(table)
+    scoring = markdown(table, paper=False, rows=SCORING_ROWS,
+                       title="Attitude error scored both ways")
     for label in FC_LABELS.values():      # "S1 ArduCopter", "S1 PX4", not "... ours"
         md = md.replace(f" {label} ours |", f" {label} |")
+        scoring = scoring.replace(f" {label} ours |", f" {label} |")
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "table1.md").write_text(md + "\n")
+    (out_dir / "table1.md").write_text(md + "\n\n" + scoring + "\n")
     (out_dir / "table1.json").write_text(json.dumps(table, indent=2) + "\n")
     index = None
     if not args.no_report:
-        index = write_report(results, md, table, out_dir)
+        index = write_report(results, md, table, out_dir,
+                             extra_sections=[("Attitude error: command and FC target", scoring)])
     if args.json:
         print(json.dumps(table))
     else:
         print(md)
+        print()
+        print(scoring)
         print(f"\n{len(results)} runs, {table['sim_s_total']:.0f} s simulated in "
               f"{wall_s:.1f} s wall ({table['sim_s_total'] / max(wall_s, 1e-9):.0f}x real "
               f"time overall)")

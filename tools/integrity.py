@@ -47,8 +47,9 @@ RATE_KEYS = {
     "/fc/status": ("pwm_hz",),
 }
 # Channels whose sim time may repeat (several rows for one instant).
-# /setpoint: a scenario may script two setpoints for one step.
-NON_STRICT = {"/timing", "/setpoint"}
+# /setpoint: a scenario may script two setpoints for one step; /fc/target: an external FC's
+# reports are stamped when read, and two may be read at one physics step.
+NON_STRICT = {"/timing", "/setpoint", "/fc/target"}
 _FAILED = re.compile(r"\bfail(ed|s|ure)?\b", re.IGNORECASE)
 ROUNDING_SLACK = 2  # samples: first/last sample conventions differ by one at each end
 

@@ -11,17 +11,15 @@ sat_pct          Saturation occupancy: share of PWM samples in which any motor
                  has |u| >= 0.99, u = (pwm - mid) / half, mid and half from the
                  run's MOT_PWM_MIN/MOT_PWM_MAX parameters (1000/2000 us if not
                  logged), so u = +-1 at the PWM limits; in percent.
-att_rms_deg      Attitude error against the commanded attitude: at every FC
-att_p95_deg      status row (400 Hz), e = sqrt(droll^2 + dpitch^2) with
-att_max_deg      d = commanded (att_target_rad) - TRUE attitude (ZYX Euler of
-                 the /gt_att quaternion, the latest sample at or before the
-                 status time), wrapped to +-180 deg. RMS, 95th percentile
-                 (linear interpolation) and maximum of e. Yaw is excluded: it is
-                 rate-damped with no heading target. att_rms_roll_deg and
-                 att_rms_pitch_deg: per axis. The commanded attitude is the
-                 FC's attitude target after input shaping (ATC_INPUT_TC,
-                 ATC_ACCEL_*_MAX), what ArduCopter logs as ATT.DesRoll/DesPitch;
-                 with SB_SHAPE_EN = 0 it is the raw scenario/GCS command.
+att_rms_deg      Attitude error against the scenario's command (the paper's
+att_p95_deg      definition, Table 1's headline): the same as
+att_max_deg      att_rms_cmd_deg, att_p95_cmd_deg, att_max_cmd_deg.
+att_*_cmd_deg    At every FC status row, e = sqrt(droll^2 + dpitch^2), d =
+att_*_target_deg reference - TRUE attitude (/gt_att); RMS, 95th percentile,
+                 maximum, and per axis (att_rms_roll_*, att_rms_pitch_*).
+                 cmd: the scenario's command (/setpoint); target: the FC's own
+                 shaped target (/fc/target for an external FC, /fc/status
+                 att_target_rad for ours). tools/att_scoring.py says exactly how.
 yaw_rate_rad_s   Steady yaw rate: mean TRUE body z rate (/gt_att
                  rates_frd_rad_s[2]) over the yaw window (90-120 s);
                  yaw_rate_abs_rad_s: mean of its magnitude.
@@ -51,6 +49,7 @@ import math
 
 import numpy as np
 
+from silbridge.tools.att_scoring import attitude_scores, roll_pitch_from_quat  # noqa: F401
 from silbridge.tools.mcap_log import RunLog
 
 NAN = float("nan")
@@ -119,37 +118,11 @@ def _pwm_metrics(log: RunLog, win) -> dict:
     return out
 
 
-def roll_pitch_from_quat(q_wxyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """ZYX Euler roll and pitch [rad] of body-to-NED quaternions (w, x, y, z)."""
-    q = q_wxyz.astype(np.float64)
-    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    roll = np.arctan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
-    pitch = np.arcsin(np.clip(2.0 * (w * y - z * x), -1.0, 1.0))
-    return roll, pitch
-
-
-def _wrap_rad(a: np.ndarray) -> np.ndarray:
-    return (a + np.pi) % (2.0 * np.pi) - np.pi
-
-
 def _attitude_metrics(log: RunLog, win) -> dict:
-    out = {k: NAN for k in ("att_rms_deg", "att_p95_deg", "att_max_deg",
-                            "att_rms_roll_deg", "att_rms_pitch_deg")}
-    st = _select(log, "/fc/status", win)
-    gt = log.channels.get("/gt_att")
-    if st is None or not len(st) or gt is None or not len(gt):
-        return out
-    # The latest truth sample at or before each status time (the first if none is).
-    idx = np.clip(np.searchsorted(gt["sim_ns"], st["sim_ns"], side="right") - 1, 0, len(gt) - 1)
-    roll, pitch = roll_pitch_from_quat(gt["q_wxyz"][idx])
-    target = st["att_target_rad"].astype(np.float64)
-    d_roll = np.rad2deg(_wrap_rad(target[:, 0] - roll))
-    d_pitch = np.rad2deg(_wrap_rad(target[:, 1] - pitch))
-    e = np.hypot(d_roll, d_pitch)
-    out.update(att_rms_deg=float(np.sqrt(np.mean(e * e))),
-               att_p95_deg=float(np.percentile(e, 95)), att_max_deg=float(e.max()),
-               att_rms_roll_deg=float(np.sqrt(np.mean(d_roll ** 2))),
-               att_rms_pitch_deg=float(np.sqrt(np.mean(d_pitch ** 2))))
+    out = attitude_scores(log, _select(log, "/fc/status", win))
+    # The headline (Table 1, the paper): against the command.
+    for k in ("rms", "p95", "max", "rms_roll", "rms_pitch"):
+        out[f"att_{k}_deg"] = out[f"att_{k}_cmd_deg"]
     return out
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .att_scoring import command_at, target_at
 from .report_html import render_index
 from .table1 import ROWS, scenario_key
 from .viz_frames import euler_from_quat
@@ -58,15 +59,18 @@ def trace_plots(log, name: str, out_dir: Path, windows, who: str = "run 0"
         idx = np.clip(np.searchsorted(gt["sim_ns"], st["sim_ns"]), 0, len(gt) - 1)
         euler = euler_from_quat(gt["q_wxyz"][idx])
         roll, pitch = euler[:, 0], euler[:, 1]
-        tgt = st["att_target_rad"]
-        err = np.degrees(np.hypot(roll - tgt[:, 0], pitch - tgt[:, 1]))
+        series = []
+        for label, ref in (("vs command", command_at(log, st["sim_ns"], st)),
+                           ("vs FC target", target_at(log, st["sim_ns"], st))):
+            if ref is not None:
+                series.append((np.degrees(np.hypot(roll - ref[:, 0], pitch - ref[:, 1])), label))
         files.append((_save_trace(
-            plt, out_dir, f"{_stem(name)}_attitude_error.png", st["sim_ns"] / 1e9, [(err, None)],
+            plt, out_dir, f"{_stem(name)}_attitude_error.png", st["sim_ns"] / 1e9, series,
             ylabel="attitude error [deg]", span=windows[2], span_label="analysis window",
-            title=f"{name}: roll/pitch error vs commanded (shaped) target, {who}"),
+            title=f"{name}: roll/pitch error vs the command and the FC's own target, {who}"),
             f"{name}, {who}: combined roll/pitch error of the true attitude against the "
-            "commanded target (the FC's shaped target) at each PWM tick; shaded: the "
-            "analysis window of the RMS and P95 figures."))
+            "scenario's command and against the FC's own shaped target at each PWM tick; "
+            "shaded: the analysis window of the RMS and P95 figures."))
     pwm = ch.get("/pwm")
     if pwm is not None and len(pwm):
         us = pwm["pwm_us"]

@@ -126,10 +126,11 @@ def write_defaults(path: str, params: dict) -> None:
 
 
 def start_sitl(binary: str, instance: int, workdir: str, *, speedup: float, home,
-               defaults_path: str) -> subprocess.Popen:
-    """arducopter --model JSON in workdir (fresh EEPROM); console output to workdir/sitl.log."""
+               defaults_path: str, model: str = "JSON:127.0.0.1") -> subprocess.Popen:
+    """arducopter --model JSON in workdir (fresh EEPROM); console output to workdir/sitl.log.
+    model: another --model (e.g. "quad", SITL's own physics: the speed reference)."""
     home_arg = f"{home.lat_deg},{home.lon_deg},{home.alt_m},{home.heading_deg}"
-    cmd = [binary, "--model", "JSON:127.0.0.1", "--speedup", f"{speedup:g}",
+    cmd = [binary, "--model", model, "--speedup", f"{speedup:g}",
            "--instance", str(instance), "--defaults", defaults_path, "--home", home_arg, "-w"]
     log = open(os.path.join(workdir, "sitl.log"), "w")
     try:
@@ -161,7 +162,8 @@ class MavlinkDriver(threading.Thread):
     """GCS over SITL's TCP port: GUIDED, arm, take off; reports ArduCopter's target and altitude."""
 
     def __init__(self, instance: int, *, takeoff_alt_m: float, sim_time_s, on_takeoff, target,
-                 connect_timeout_s: float = 30.0, on_takeoff_sent=None):
+                 connect_timeout_s: float = 30.0, on_takeoff_sent=None, target_feed=None,
+                 sim_ns=None):
         super().__init__(daemon=True, name=f"sitl-mavlink-{instance}")
         self.addr = ("127.0.0.1", MAVLINK_TCP_BASE + PORT_STRIDE * instance)
         self.takeoff_alt_m = takeoff_alt_m
@@ -169,6 +171,10 @@ class MavlinkDriver(threading.Thread):
         self.on_takeoff = on_takeoff                 # () on the ACK that accepts the take-off
         self.on_takeoff_sent = on_takeoff_sent or (lambda: None)   # () before each one is sent
         self.target = target
+        # Each ATTITUDE_TARGET with its stamp and the physics time it was read, for the
+        # run log's /fc/target (tools/fc_target.py).
+        self.target_feed = target_feed
+        self.sim_ns = sim_ns or (lambda: int(self.sim_time_s() * 1e9))
         self.connect_timeout_s = connect_timeout_s
         self.codec = mav.MAVLink(self, srcSystem=255, srcComponent=190)
         self.codec.robust_parsing = True
@@ -293,7 +299,10 @@ class MavlinkDriver(threading.Thread):
             self.armed = bool(m.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED)
             self.mode = m.custom_mode
         elif kind == "ATTITUDE_TARGET":
-            self.target.set(*euler_from_quat(*m.q), SOURCE_ATTITUDE_TARGET)
+            euler = euler_from_quat(*m.q)
+            self.target.set(*euler, SOURCE_ATTITUDE_TARGET)
+            if self.target_feed is not None:
+                self.target_feed.put(self.sim_ns(), m.time_boot_ms * 1_000_000, *euler)
         elif kind == "GLOBAL_POSITION_INT":
             self.rel_alt_m = m.relative_alt * 1e-3
         elif kind == "NAV_CONTROLLER_OUTPUT":

@@ -26,6 +26,16 @@ ROWS = [
     ("jitter_ms", "jitter p99", "ms", "{:.4f}"),
 ]
 
+# The report's second table: the attitude error scored both ways (tools/att_scoring.py) and
+# the speed of the runs.
+SCORING_ROWS = [
+    ("att_rms_cmd_deg", "RMS vs command", "deg", "{:.3f}"),
+    ("att_p95_cmd_deg", "P95 vs command", "deg", "{:.3f}"),
+    ("att_rms_target_deg", "RMS vs FC target", "deg", "{:.3f}"),
+    ("att_p95_target_deg", "P95 vs FC target", "deg", "{:.3f}"),
+    ("realtime_factor", "speed", "x real time", "{:.1f}"),
+]
+
 # The paper's Table 1 (S1 hover, S2 gyro bias, S3 dynamic accel, S4 aggressive tilt).
 PAPER = {
     "S1": {"pwm_pp_us": 46, "sat_pct": 0, "att_rms_deg": 1.227, "att_p95_deg": 0.724},
@@ -76,7 +86,7 @@ def _cell(stat: dict | None, fmt: str) -> str:
     return f"{_num(fmt, m)} ± {_num(fmt, s)}"
 
 
-def markdown(table: dict, *, paper: bool = True, title: str = "Table 1") -> str:
+def markdown(table: dict, *, paper: bool = True, title: str = "Table 1", rows=None) -> str:
     names = list(table["scenarios"])
     n = max((next(iter(v.values()))["n"] for v in table["scenarios"].values() if v), default=0)
     head = ["metric"]
@@ -86,7 +96,7 @@ def markdown(table: dict, *, paper: bool = True, title: str = "Table 1") -> str:
             head.append(f"{name} paper")
     lines = [f"**{title}** (mean ± std over n = {n} runs per scenario)", "",
              "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for key, label, unit, fmt in ROWS:
+    for key, label, unit, fmt in rows or ROWS:
         row = [f"{label} ({unit})"]
         for name in names:
             row.append(_cell(table["scenarios"][name].get(key), fmt))

@@ -178,7 +178,10 @@ def test_bridge_side_log_forwards_the_profile_and_logs_timing(tmp_path):
     st = log.channels["/fc/status"]
     assert st["sim_ns"][0] == 0 and len(st) == 2500 and (np.diff(st["sim_ns"]) == 1e6).all()
     assert len(log.channels["/pwm"]) == 2500 and log.channels["/imu"]["sim_ns"][0] >= 0
-    assert "/setpoint" not in log.channels
+    # The command as forwarded, on the log clock: what the "cmd" scoring reads.
+    sp = log.channels["/setpoint"]
+    assert sp["sim_ns"][0] == 0 and sp["roll_rad"].max() == pytest.approx(amp_rad, rel=1e-6)
+    assert len(sp) < len(st) and (np.diff(sp["sim_ns"]) > 0).all()
     # The metrics' command is what was sent, on the physics clock.
     assert st["att_target_rad"][:, 0].max() == pytest.approx(amp_rad, rel=1e-6)
     i_ramp = np.searchsorted(st["sim_ns"], int(1.25e9))
@@ -358,6 +361,8 @@ def test_arducopter_arms_takes_off_and_hovers_30_s(tmp_path):
     alt_m = -nav["pos_ned_m"][nav["sim_ns"] >= 20e9][:, 2]
     assert abs(alt_m.mean() - 10.0) < 1.0        # thrust 0.5 holds the take-off altitude
     assert math.isfinite(r.metrics["att_rms_deg"]) and r.metrics["att_rms_deg"] < 5.0
+    for k in ("att_rms_cmd_deg", "att_p95_cmd_deg", "att_rms_target_deg", "att_p95_target_deg"):
+        assert math.isfinite(r.metrics[k]) and r.metrics[k] < 5.0, k
     # The level command went out once ArduCopter reported the take-off altitude, and it
     # answered with its own target; the JSON link was timed.
     assert r.summary["forwarding_started_by"] == "altitude" and r.summary["setpoints_sent"] > 100
@@ -387,6 +392,16 @@ def test_arducopter_flies_the_s4_roll_doublet(tmp_path):
     from silbridge.tools.metrics import roll_pitch_from_quat
     roll, _ = roll_pitch_from_quat(log.channels["/gt_att"]["q_wxyz"])
     assert roll.max() > 0.7 * amp_rad and roll.min() < -0.7 * amp_rad
+    # Scored both ways: its controller tracks its own shaped target (ATTITUDE_TARGET at
+    # 50 Hz of sim time, placed by its stamps) closely; the raw command, which its input
+    # shaping smooths, it trails by degrees.
+    tg = log.channels["/fc/target"]
+    assert (np.diff(np.sort(tg["fc_time_ns"])) <= 20_000_000).mean() > 0.95
+    m = r.metrics
+    assert m["att_rms_target_deg"] < 1.5 and m["att_p95_target_deg"] < 2.5
+    assert m["att_rms_cmd_deg"] > 2.0 * m["att_rms_target_deg"] and m["att_rms_cmd_deg"] > 1.5
+    assert m["att_rms_deg"] == m["att_rms_cmd_deg"]
+    assert r.metrics["realtime_factor"] > 0
 
 
 @pytest.fixture

@@ -1,0 +1,38 @@
+"""`python -m silbridge.tools.ardupilot_speed`: the same ArduCopter binary on its own physics
+and on ours, side by side. The figures depend on the machine: only that both are measured and
+reported (and the per-packet profile) is checked, never a speed."""
+
+import json
+import math
+import os
+import subprocess
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.skipif(
+    not os.environ.get("SILBRIDGE_ARDUCOPTER"),
+    reason="set SILBRIDGE_ARDUCOPTER to an arducopter SITL binary to compare its speeds "
+           "(none on this machine; see README 'ArduCopter SITL')")
+
+
+def test_speed_tool_prints_both_speeds_and_the_ratio():
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools.ardupilot_speed", "--skip", "2",
+                        "--span", "3", "--flight", "0", "--json"],
+                       capture_output=True, text=True, timeout=150)
+    assert p.returncode == 0, p.stderr[-2000:]
+    out = json.loads(p.stdout)
+    ref, ours = out["reference"]["realtime_factor"], out["json_idle"]["realtime_factor"]
+    assert ref > 0 and ours > 0 and math.isfinite(out["ratio_json_idle"])
+    assert out["ratio_json_idle"] == pytest.approx(ours / ref)
+    assert out["json_idle"]["packets"] >= 2900          # 3 s at 1 kHz, one per frame
+    assert out["json_floor"]["realtime_factor"] > 0 and math.isfinite(out["ratio_json_floor"])
+    for key in ("ours_us", "ours_step_us", "sitl_us"):
+        assert out["json_idle"][key]["median"] > 0
+
+
+def test_speed_tool_without_a_binary_says_how_to_get_one(tmp_path):
+    env = dict(os.environ, SILBRIDGE_ARDUCOPTER=str(tmp_path / "missing"))
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools.ardupilot_speed", "--json"],
+                       capture_output=True, text=True, timeout=60, env=env)
+    assert p.returncode == 2 and "waf copter" in p.stderr and "Traceback" not in p.stderr
