@@ -40,7 +40,7 @@ SUB_MODE_TAKEOFF = 2
 
 class Px4Driver(threading.Thread):
     def __init__(self, instance: int, *, sim_time_s, target, on_takeoff, on_takeoff_sent=None,
-                 connect_timeout_s: float = 60.0):
+                 connect_timeout_s: float = 60.0, target_feed=None, sim_ns=None):
         super().__init__(daemon=True, name=f"px4-mavlink-{instance}")
         self.peer = ("127.0.0.1", OFFBOARD_LOCAL_BASE + instance)
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -52,6 +52,10 @@ class Px4Driver(threading.Thread):
                            f"({e.strerror}): another program uses PX4 instance {instance}") from None
         self.sim_time_s = sim_time_s
         self.target = target
+        # Each ATTITUDE_TARGET with PX4's stamp and the physics time it was read: the FC-target
+        # channel /fc/target that scores every FC against its own target (tools/fc_target.py).
+        self.target_feed = target_feed
+        self.sim_ns = sim_ns or (lambda: int(self.sim_time_s() * 1e9))
         self.on_takeoff = on_takeoff
         self.on_takeoff_sent = on_takeoff_sent or (lambda: None)
         self.connect_timeout_s = connect_timeout_s
@@ -167,7 +171,10 @@ class Px4Driver(threading.Thread):
             self.main_mode = (m.custom_mode >> 16) & 0xFF
             self.sub_mode = (m.custom_mode >> 24) & 0xFF
         elif kind == "ATTITUDE_TARGET":
-            self.target.set(*euler_from_quat(*m.q), SOURCE_ATTITUDE_TARGET)
+            euler = euler_from_quat(*m.q)
+            self.target.set(*euler, SOURCE_ATTITUDE_TARGET)
+            if self.target_feed is not None:
+                self.target_feed.put(self.sim_ns(), m.time_boot_ms * 1_000_000, *euler)
         elif kind == "LOCAL_POSITION_NED":
             self.alt_m, self.climb_m_s = -m.z, -m.vz
         elif kind == "COMMAND_ACK":

@@ -27,6 +27,7 @@ from silbridge.mavlink.hil_channel import make_codec
 
 from .ardupilot_flight import BenchStepHooks
 from .ardupilot_log import ArduPilotLogSink, AttitudeTarget
+from .fc_target import TargetFeed
 from .px4_driver import Px4Driver
 from .px4_setpoints import Px4SetpointForwarder
 from .sitl_px4 import (
@@ -80,6 +81,7 @@ def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: st
     """One PX4 run: boot, arm, take off, OFFBOARD for duration_s; log from take-off."""
     sc, make_sim = _factory(scenario, seed, imu_hz)
     target = AttitudeTarget()
+    feed = TargetFeed()
     phys = Px4Physics(make_sim, make_codec(SIM_SYSID, SIM_COMPID))
     sim = phys.sim
     p4 = px4_params(sim, sc, overrides=params)
@@ -88,7 +90,8 @@ def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: st
     try:
         driver = Px4Driver(instance, sim_time_s=lambda: phys.sim.sim_ns / _NS, target=target,
                            on_takeoff=lambda: hooks.takeoff_accepted(),
-                           on_takeoff_sent=lambda: hooks.takeoff_sent(phys.sim.sim_ns))
+                           on_takeoff_sent=lambda: hooks.takeoff_sent(phys.sim.sim_ns),
+                           target_feed=feed, sim_ns=lambda: phys.sim.sim_ns)
     except BaseException:
         release_instance(instance)
         shutil.rmtree(workdir, ignore_errors=True)
@@ -98,7 +101,8 @@ def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: st
                                      hover_thrust=p4["MPC_THR_HOVER"])
     sink = ArduPilotLogSink(log_path, metadata=_metadata(sc, sim, phys, duration_s, p4, binary,
                                                          realtime),
-                            target=target, duration_s=duration_s, command=forwarder)
+                            target=target, duration_s=duration_s, command=forwarder,
+                            target_feed=feed)
     hooks = phys.sink = BenchStepHooks(forwarder, sink)
     proc = None
     server = None
@@ -165,7 +169,7 @@ def _metadata(sc, sim, phys, duration_s, params, binary, realtime) -> dict:
             # per physics step (its outputs held), as ArduCopter runs do.
             "px4_step_hz": phys.step_hz,
             "att_target": "scenario command sent to PX4 (SET_ATTITUDE_TARGET, OFFBOARD)",
-            "fc_target": "PX4's ATTITUDE_TARGET in /fc/status ap_target_rad",
+            "fc_target": "PX4's ATTITUDE_TARGET in /fc/target (and /fc/status ap_target_rad)",
             "timing": "PX4 HIL link, bridge side: imu_wall_ns = HIL_ACTUATOR_CONTROLS "
                       "arrival, consume_wall_ns = physics step done, pwm_wall_ns = sensors "
                       "sent",
