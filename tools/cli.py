@@ -30,6 +30,7 @@ COMMANDS = {
     "params": "cmd_params",
     "shm-bench": "cmd_shm_bench",
     "fc-bench": "cmd_fc_bench",
+    "tune": "cmd_tune",
 }
 
 
