@@ -37,6 +37,7 @@ TRACK_KEYS = ("att_rms_cmd_deg", "att_rms_deg")
 SMOOTH_KEY = "pwm_pp_us"
 SAT_KEY = "sat_pct"
 _ABBR = {"roll": "RLL", "pitch": "PIT", "yaw": "YAW"}
+CONSTRAINT_NAMES = ("phase_margin", "gain_margin", "saturation", "s1_pwm_pp")
 
 # name pattern -> (low, high, log scale). Ranges bracket ArduCopter's usual
 # values for a 450 mm quad on both sides of our defaults.
@@ -79,6 +80,10 @@ class AutoConfig:
     check_sweep: SweepConfig = field(default_factory=SweepConfig)
     pm_min: float = PM_MIN
     gm_min: float = GM_MIN
+    # Search flights are shorter than Table 1's 120 s (same warm-up and transient, an
+    # analysis window of 30-70 s: four S4 doublets); every trial uses the same windows,
+    # the defaults included, and the before/after check flies the full protocol.
+    search_duration_s: float = 70.0
 
 
 def track_key(metrics: dict) -> str:
@@ -99,10 +104,16 @@ def auto_task(task: tuple):
     return sysid_task(payload)
 
 
-def _spec(scenario: str, seed: int, params: dict, work: Path, tag: str) -> RunSpec:
-    return RunSpec(scenario=scenario, run_index=seed, seed=seed, duration_s=120.0,
+def _spec(scenario: str, seed: int, params: dict, work: Path, tag: str,
+          duration_s: float = 120.0) -> RunSpec:
+    windows = RunSpec.windows
+    if duration_s < windows[2][1]:
+        windows = ((0.0, 10.0), (10.0, 30.0), (30.0, duration_s),
+                   (max(30.0, duration_s - 30.0), duration_s))
+    return RunSpec(scenario=scenario, run_index=seed, seed=seed, duration_s=duration_s,
                    log_path=str(work / f"{tag}_{scenario}_s{seed}.mcap"),
-                   params=tuple(sorted(params.items())), keep_log=False, variant=tag)
+                   params=tuple(sorted(params.items())), keep_log=False, variant=tag,
+                   windows=windows)
 
 
 def evaluate(pool, candidates: list[dict], cfg: AutoConfig, work: Path, tag: str) -> list[dict]:
@@ -110,7 +121,8 @@ def evaluate(pool, candidates: list[dict], cfg: AutoConfig, work: Path, tag: str
     tasks, where = [], []
     for ci, params in enumerate(candidates):
         for sc in ("S1", "S4"):
-            tasks.append(("flight", _spec(sc, cfg.seed, params, work, f"{tag}{ci}")))
+            tasks.append(("flight", _spec(sc, cfg.seed, params, work, f"{tag}{ci}",
+                                          cfg.search_duration_s)))
             where.append((ci, sc))
         for axis in cfg.axes:
             tasks.append(("sweep", (axis, "output", cfg.sweep, params)))
@@ -128,7 +140,9 @@ def evaluate(pool, candidates: list[dict], cfg: AutoConfig, work: Path, tag: str
 def constraints(ev: dict, cfg: AutoConfig, base_pp: float) -> list[float]:
     """Values <= 0 when satisfied: PM, GM (worst tuned axis), saturation, S1 p-p."""
     pms = [m.get("phase_margin_deg") for m in ev["margins"].values()]
-    gms = [m.get("gain_margin_db") for m in ev["margins"].values()]
+    # A phase crossover above the sweep's coherent band counts with its bound (tune_sysid).
+    gms = [m.get("gain_margin_db") if m.get("gain_margin_db") is not None
+           else m.get("gain_margin_min_db") for m in ev["margins"].values()]
     pm = min((v if v is not None else -math.inf) for v in pms)
     gm = min((v if v is not None else -math.inf) for v in gms)
     sat = float(ev["S1"].get(SAT_KEY) or 0.0) + float(ev["S4"].get(SAT_KEY) or 0.0)
@@ -154,9 +168,11 @@ def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> di
     start = {n: float(base.get(n, defaults[n])) for n in space}
     for n, (lo, hi, _log) in space.items():
         start[n] = min(max(start[n], lo), hi)
+    # Constraints: Trial.set_constraint from optuna 5, the sampler's constraints_func before.
+    new_api = hasattr(optuna.trial.Trial, "set_constraint")
+    extra = {} if new_api else {"constraints_func": lambda t: t.user_attrs["constraints"]}
     sampler = optuna.samplers.TPESampler(
-        seed=cfg.seed, multivariate=True, n_startup_trials=max(4, cfg.trials // 4),
-        constraints_func=lambda t: t.user_attrs["constraints"])
+        seed=cfg.seed, multivariate=True, n_startup_trials=max(4, cfg.trials // 4), **extra)
     study = optuna.create_study(direction="minimize", sampler=sampler)
     study.enqueue_trial(start)     # trial 0: the defaults (clipped into the space)
     bar = tqdm(total=cfg.trials, desc="tune auto", unit="trial", disable=not progress,
@@ -176,6 +192,9 @@ def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> di
             for t, c, ev in zip(trials, cands, evs):
                 cons = constraints(ev, cfg, base_pp)
                 t.set_user_attr("constraints", cons)
+                if new_api:
+                    for cname, value in zip(CONSTRAINT_NAMES, cons):
+                        t.set_constraint(cname, value)
                 obj = objective(ev)
                 study.tell(t, obj)
                 evals.append({"number": t.number, "candidate": c, "objective": obj,
@@ -210,7 +229,8 @@ def check(before: dict, after: dict, margins: dict, cfg: AutoConfig) -> dict:
     """The targets of the issue, each with its figures."""
     tk = track_key(after["S4"])
     ok_m = all((m.get("phase_margin_deg") or -1) >= cfg.pm_min
-               and (m.get("gain_margin_db") or -1) >= cfg.gm_min for m in margins.values())
+               and (m.get("gain_margin_db") or m.get("gain_margin_min_db") or -1) >= cfg.gm_min
+               for m in margins.values())
     res = {
         "track_metric": tk,
         "s4_track_better": after["S4"][tk] < before["S4"][tk],

@@ -55,8 +55,11 @@ def run_sysid(args, axes, base: dict, out_dir: Path, pool, say) -> dict:
     write_index(out_dir, "silbridge tune sysid", summary,
                 [("Margins and bandwidth", margins_table(summaries))], images)
     for axis, s in summaries.items():
+        gm = (f"GM {_fmt(s['gain_margin_db'])} dB at {_fmt(s['phase_crossover_hz'], '{:.2f}')} Hz"
+              if s.get("gain_margin_db") is not None or s.get("gain_margin_min_db") is None
+              else f"GM >= {s['gain_margin_min_db']:.1f} dB (phase crossover above the band)")
         say(f"{axis}: PM {_fmt(s['phase_margin_deg'])} deg at {_fmt(s['crossover_hz'], '{:.2f}')} Hz, "
-            f"GM {_fmt(s['gain_margin_db'])} dB at {_fmt(s['phase_crossover_hz'], '{:.2f}')} Hz, "
+            f"{gm}, "
             f"delay margin {_fmt(s['delay_margin_ms'])} ms, bandwidth "
             f"{_fmt(s['bandwidth_hz'], '{:.2f}')} Hz")
         pv = s.get("plant_vs_model")
@@ -124,8 +127,10 @@ def run_auto_cmd(args, axes, base: dict, out_dir: Path, pool, say) -> dict:
             f"{_fmt(t['S1'].get('pwm_pp_us'))} us, sat S1/S4 {_fmt(t['S1'].get('sat_pct'), '{:.2f}')}"
             f"/{_fmt(t['S4'].get('sat_pct'), '{:.2f}')} %")
     for axis, m in r["margins"].items():
-        say(f"{axis} after: PM {_fmt(m.get('phase_margin_deg'))} deg, GM "
-            f"{_fmt(m.get('gain_margin_db'))} dB")
+        gm = m.get("gain_margin_db")
+        gm_text = (f"{_fmt(gm)} dB" if gm is not None or m.get("gain_margin_min_db") is None
+                   else f">= {m['gain_margin_min_db']:.1f} dB")
+        say(f"{axis} after: PM {_fmt(m.get('phase_margin_deg'))} deg, GM {gm_text}")
     say(f"targets met: {d['verdict'].get('met')}; {d['feasible_trials']}/{d['trials']} trials "
         f"feasible; search {d['search_wall_s']:.0f} s, total {d['wall_s']:.0f} s")
     say(f"parameters: {r['parm_file']}; report: {out_dir / 'index.html'}")

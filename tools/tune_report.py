@@ -131,6 +131,9 @@ def margins_table(summaries: dict) -> str:
         cells = []
         for key, _label, fmt in cols:
             v = s.get(key)
-            cells.append("beyond the sweep" if v is None else fmt.format(v))
+            if v is None and key == "gain_margin_db" and s.get("gain_margin_min_db") is not None:
+                cells.append(">= " + fmt.format(s["gain_margin_min_db"]))
+            else:
+                cells.append("beyond the sweep" if v is None else fmt.format(v))
         lines.append(f"| {axis} | " + " | ".join(cells) + " |")
     return "\n".join(lines)

@@ -151,6 +151,19 @@ def _in_band(frf: Frf, cfg: SweepConfig, coh_min: float = COHERENCE_MIN) -> Frf:
     return sel.select(slice(first, last))
 
 
+def gain_margin_bound(band: Frf, s: dict) -> float | None:
+    """When the phase crossover lies above the coherent band: the gain margin is at least
+    -|L| at the band's top, because beyond it |L| only falls (a strictly proper plant
+    behind low-pass filters: the rigid body's -40 dB/decade outruns the D term's +20)
+    while the phase keeps dropping. None when the band says nothing (or GM was found)."""
+    if s.get("gain_margin_db") is not None or len(band.f_hz) < 2:
+        return s.get("gain_margin_db")
+    mag = 20.0 * np.log10(np.abs(band.h[-1]))
+    if mag >= 0.0:
+        return None
+    return float(-mag)
+
+
 def coherent_band(frf: Frf, cfg: SweepConfig) -> list | None:
     b = _in_band(frf, cfg)
     return [float(b.f_hz[0]), float(b.f_hz[-1])] if len(b.f_hz) else None
@@ -164,6 +177,7 @@ def summarise_axis(axis: str, out: dict | None, inp: dict | None, cfg: SweepConf
         res.frfs.update(out)
         band = _in_band(out["open_loop"], cfg)
         s.update(margins(band.f_hz, band.h))
+        s["gain_margin_min_db"] = gain_margin_bound(band, s)
         s["open_loop_band_hz"] = coherent_band(out["open_loop"], cfg)
         s["plant_band_hz"] = coherent_band(out["plant"], cfg)
     if inp is not None:
