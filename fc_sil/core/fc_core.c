@@ -131,7 +131,7 @@ static void derive_configs(fc_core_t *c)
         ((p->pilot_speed_dn > 0.0f) ? p->pilot_speed_dn : p->pilot_speed_up) * 0.01f;
     c->alt_cfg.hover_throttle = p->mot_thst_hover;
 
-    c->sysid_cfg.axis = p->sid_axis;
+    c->sysid_cfg.axis = (uint8_t)p->sid_axis; /* range 0..13 (fc_params.def) */
     c->sysid_cfg.magnitude = p->sid_magnitude;
     c->sysid_cfg.f_start_hz = p->sid_f_start_hz;
     c->sysid_cfg.f_stop_hz = p->sid_f_stop_hz;
