@@ -28,7 +28,7 @@ from pathlib import Path
 from silbridge.fc_sil import params as P
 
 from .campaign import RunSpec, run_one
-from .tune_sysid import SweepConfig, identify, sysid_task, summarise_axis
+from .tune_sysid import SweepConfig, TuneError, identify, summarise_axis, sysid_task
 
 PM_MIN = 45.0
 GM_MIN = 6.0
@@ -39,15 +39,18 @@ SAT_KEY = "sat_pct"
 _ABBR = {"roll": "RLL", "pitch": "PIT", "yaw": "YAW"}
 CONSTRAINT_NAMES = ("phase_margin", "gain_margin", "saturation", "s1_pwm_pp")
 
-# name pattern -> (low, high, log scale). Ranges bracket ArduCopter's usual
-# values for a 450 mm quad on both sides of our defaults.
+# name pattern -> (low, high, log scale). Gains bracket ArduCopter's usual values
+# for a 450 mm quad on both sides of our defaults. The measurement-path cutoffs
+# (INS_GYRO_FILTER, FLTD) start at the defaults' 20 Hz: a sweep of the defaults
+# shows the loop already short of phase there (PM ~30 deg at ~5.6 Hz, of which the
+# 20 Hz gyro Butterworth takes ~23 deg), so lower cutoffs can only lose margin.
 _RATE_SPACE = {"P": (0.04, 0.4, True), "I": (0.04, 0.6, True), "D": (0.0005, 0.012, True),
-               "FF": (0.0, 0.15, False), "FLTD": (10.0, 80.0, True),
+               "FF": (0.0, 0.15, False), "FLTD": (20.0, 80.0, True),
                "FLTT": (10.0, 80.0, True)}
 _YAW_SPACE = {"P": (0.05, 0.6, True), "I": (0.005, 0.1, True), "D": (0.0, 0.01, False),
               "FF": (0.0, 0.15, False), "FLTE": (1.0, 10.0, True)}
 _ANG_SPACE = (3.0, 12.0, False)
-_GYRO_SPACE = (15.0, 80.0, True)
+_GYRO_SPACE = (20.0, 80.0, True)
 
 
 def search_space(axes) -> dict[str, tuple[float, float, bool]]:
@@ -94,14 +97,20 @@ def track_key(metrics: dict) -> str:
 
 
 def auto_task(task: tuple):
-    """Executor task: ("flight", RunSpec) -> metrics | ("sweep", sysid task) -> FRFs."""
+    """Executor task: ("flight", RunSpec) -> metrics | ("sweep", sysid task) -> FRFs.
+    A candidate that crashes the vehicle (a flight, or a sweep) is an answer, not an
+    error: {"failed": reason} (a flight) or (key, None) (a sweep)."""
     kind, payload = task
     if kind == "flight":
         res = run_one(payload)
-        if res.problems:
-            raise RuntimeError(f"{payload.log_path}: {res.problems[0]}")
+        if res.summary.get("crashed") or res.problems:
+            why = "crashed" if res.summary.get("crashed") else res.problems[0]
+            return {"failed": f"{payload.scenario}: {why}"}
         return res.metrics
-    return sysid_task(payload)
+    try:
+        return sysid_task(payload)
+    except TuneError as exc:
+        return (payload[0], payload[1]), {"failed": str(exc)}
 
 
 def _spec(scenario: str, seed: int, params: dict, work: Path, tag: str,
@@ -131,14 +140,22 @@ def evaluate(pool, candidates: list[dict], cfg: AutoConfig, work: Path, tag: str
     for (ci, key), res in zip(where, pool.map(auto_task, tasks)):
         if key in ("S1", "S4"):
             out[ci][key] = res
+            if "failed" in res:
+                out[ci]["failed"] = res["failed"]
         else:
             (axis, _inj), frfs = res
-            out[ci]["margins"][axis] = summarise_axis(axis, frfs, None, cfg.sweep).summary
+            if "failed" in frfs:
+                out[ci]["failed"] = frfs["failed"]
+                out[ci]["margins"][axis] = {}
+            else:
+                out[ci]["margins"][axis] = summarise_axis(axis, frfs, None, cfg.sweep).summary
     return out
 
 
 def constraints(ev: dict, cfg: AutoConfig, base_pp: float) -> list[float]:
     """Values <= 0 when satisfied: PM, GM (worst tuned axis), saturation, S1 p-p."""
+    if "failed" in ev:
+        return [1e3] * len(CONSTRAINT_NAMES)
     pms = [m.get("phase_margin_deg") for m in ev["margins"].values()]
     # A phase crossover above the sweep's coherent band counts with its bound (tune_sysid).
     gms = [m.get("gain_margin_db") if m.get("gain_margin_db") is not None
@@ -152,6 +169,8 @@ def constraints(ev: dict, cfg: AutoConfig, base_pp: float) -> list[float]:
 
 
 def objective(ev: dict) -> float:
+    if "failed" in ev:
+        return 1e3
     v = float(ev["S4"][track_key(ev["S4"])])
     return v if math.isfinite(v) else 1e3
 
@@ -172,7 +191,8 @@ def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> di
     new_api = hasattr(optuna.trial.Trial, "set_constraint")
     extra = {} if new_api else {"constraints_func": lambda t: t.user_attrs["constraints"]}
     sampler = optuna.samplers.TPESampler(
-        seed=cfg.seed, multivariate=True, n_startup_trials=max(4, cfg.trials // 4), **extra)
+        seed=cfg.seed, multivariate=True, n_startup_trials=max(4, min(10, cfg.trials // 5)),
+        **extra)
     study = optuna.create_study(direction="minimize", sampler=sampler)
     study.enqueue_trial(start)     # trial 0: the defaults (clipped into the space)
     bar = tqdm(total=cfg.trials, desc="tune auto", unit="trial", disable=not progress,
@@ -188,6 +208,9 @@ def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> di
                      for t in trials]
             evs = evaluate(pool, [{**base, **c} for c in cands], cfg, work, f"t{done}_")
             if base_pp is None:
+                if "failed" in evs[0]:
+                    raise TuneError(f"the starting gains fail ({evs[0]['failed']}): start "
+                                    f"from gains that fly (--param / --params)")
                 base_pp = float(evs[0]["S1"][SMOOTH_KEY])
             for t, c, ev in zip(trials, cands, evs):
                 cons = constraints(ev, cfg, base_pp)
@@ -217,6 +240,9 @@ def table1_runs(pool, params: dict, cfg: AutoConfig, work: Path, tag: str):
     specs = [_spec(sc, cfg.seed + i, params, work, tag) for sc in ("S1", "S4")
              for i in range(cfg.runs)]
     metrics = pool.map(auto_task, [("flight", s) for s in specs])
+    failed = [m["failed"] for m in metrics if "failed" in m]
+    if failed:
+        raise TuneError(f"{tag}: {failed[0]}")
     return [RunResult(spec=s, metrics=m) for s, m in zip(specs, metrics)]
 
 
@@ -266,7 +292,12 @@ def run_auto(cfg: AutoConfig, out_dir: Path, *, pool, progress=True, out=print) 
     chosen = None
     for cand in found["ranked"][:CHECKS]:
         params = {**base, **cand["candidate"]}
-        after_runs = table1_runs(pool, params, cfg, work, "after")
+        try:
+            after_runs = table1_runs(pool, params, cfg, work, "after")
+        except TuneError as exc:      # flew in the search, fails on another seed
+            checked.append({"trial": cand["number"], "verdict": {"met": False,
+                                                                  "note": str(exc)}})
+            continue
         after_tab = aggregate(after_runs)
         after = means(after_tab)
         margins = {a: r.summary for a, r in
