@@ -65,6 +65,15 @@ def add_arguments(p) -> None:
     a.add_argument("--pm-min", type=float, default=45.0, help="phase margin floor [deg]")
     a.add_argument("--gm-min", type=float, default=6.0, help="gain margin floor [dB]")
     a.add_argument("--no-progress", action="store_true", help="no progress bar")
+    n = sub.add_parser("anchor", help="fly ArduCopter's own AUTOTUNE on our physics; its "
+                                      "gains through Table 1 and the margins")
+    _common(n, "tune-out/anchor")
+    n.add_argument("--sitl", default=None, metavar="PATH",
+                   help="arducopter binary (default: $SILBRIDGE_ARDUCOPTER, then PATH)")
+    n.add_argument("--runs", type=int, default=3, help="seeds per scenario (default 3)")
+    n.add_argument("--ours", default=None, metavar="FILE",
+                   help="our tuned .parm (tune auto) for a third column")
+    n.add_argument("--aggr", type=float, default=0.1, help="AUTOTUNE_AGGR (default 0.1)")
 
 
 class TuneArgsError(Exception):
@@ -127,6 +136,9 @@ def run(args) -> int:
         elif args.action == "step":
             from .tune_cmds import run_step
             result = run_step(args, axes, base, out_dir, pool, say)
+        elif args.action == "anchor":
+            from .tune_anchor_cmd import run_anchor
+            result = run_anchor(args, axes, base, out_dir, pool, say)
         else:
             from .tune_cmds import run_auto_cmd
             result = run_auto_cmd(args, axes, base, out_dir, pool, say)

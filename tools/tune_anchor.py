@@ -44,7 +44,9 @@ COPTER_MODE_ALT_HOLD = 2     # AUTOTUNE is entered from a mode that allows it (n
 RC_MID, RC_LOW = 1500, 1000
 GAIN_NAMES = tuple(f"ATC_RAT_{a}_{t}" for a in ("RLL", "PIT", "YAW")
                    for t in ("P", "I", "D", "FF", "FLTD", "FLTT")) + \
-    ("ATC_ANG_RLL_P", "ATC_ANG_PIT_P", "ATC_ANG_YAW_P", "INS_GYRO_FILTER")
+    ("ATC_ANG_RLL_P", "ATC_ANG_PIT_P", "ATC_ANG_YAW_P", "INS_GYRO_FILTER",
+     "ATC_ACCEL_R_MAX", "ATC_ACCEL_P_MAX", "ATC_ACCEL_Y_MAX")
+AXIS_BITS = {"roll": 1, "pitch": 2, "yaw": 4}     # AUTOTUNE_AXES
 
 
 class AutotuneDriver(MavlinkDriver):
@@ -200,3 +202,23 @@ def run_autotune(binary: str, *, axes_mask: int = 3, aggr: float = 0.1, scenario
             (driver.tune_started_s or 0), "sim_s": phys.sim.sim_ns / 1e9,
             "wall_s": time.monotonic() - t0, "statustext": list(driver.statustext),
             "events": driver.events}
+
+
+def for_our_fc(gains: dict, axes) -> tuple[dict, dict]:
+    """ArduCopter's tuned values for the tuned axes, as our FC takes them: (applied,
+    clipped) where clipped lists each value our declared range cut ({name: [theirs,
+    ours]}; e.g. ATC_ANG_*_P, declared 0-12 here, which AUTOTUNE may push past 20)."""
+    from silbridge.fc_sil import params as P
+    from .tune_auto import search_space
+
+    names = set(search_space(axes)) | {f"ATC_ACCEL_{a[0].upper()}_MAX" for a in axes}
+    applied, clipped = {}, {}
+    for name in sorted(names):
+        if name not in gains:
+            continue
+        d = P.BY_NAME[name]
+        v = min(max(gains[name], d.min), d.max)
+        if v != gains[name]:
+            clipped[name] = [gains[name], v]
+        applied[name] = v
+    return applied, clipped
