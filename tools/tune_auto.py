@@ -87,6 +87,9 @@ class AutoConfig:
     # analysis window of 30-70 s: four S4 doublets); every trial uses the same windows,
     # the defaults included, and the before/after check flies the full protocol.
     search_duration_s: float = 70.0
+    # Roll and pitch share one set of values (the model's Ixx and Iyy differ by 3 %, its
+    # arms not at all): half the dimensions for the same trials. Both are still swept.
+    tie_roll_pitch: bool = True
 
 
 def track_key(metrics: dict) -> str:
@@ -182,7 +185,11 @@ def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> di
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     base = dict(cfg.base_params)
-    space = search_space(cfg.axes)
+    full = search_space(cfg.axes)
+    tied = cfg.tie_roll_pitch and {"roll", "pitch"} <= set(cfg.axes)
+    # tied: sample the roll names only; each pitch name copies its roll twin
+    twins = {n: n.replace("_RLL_", "_PIT_") for n in full if "_RLL_" in n} if tied else {}
+    space = {n: r for n, r in full.items() if not (tied and "_PIT_" in n)}
     defaults = P.defaults()
     start = {n: float(base.get(n, defaults[n])) for n in space}
     for n, (lo, hi, _log) in space.items():
@@ -206,6 +213,8 @@ def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> di
             trials = [study.ask() for _ in range(n)]
             cands = [{k: t.suggest_float(k, lo, hi, log=log) for k, (lo, hi, log) in space.items()}
                      for t in trials]
+            for c in cands:
+                c.update({twin: c[n] for n, twin in twins.items()})
             evs = evaluate(pool, [{**base, **c} for c in cands], cfg, work, f"t{done}_")
             if base_pp is None:
                 if "failed" in evs[0]:
