@@ -85,10 +85,12 @@ def run_step(args, axes, base: dict, out_dir: Path, pool, say) -> dict:
     images, axes_out, rows = [], {}, []
     for axis, res, note in results:
         t, cmd, actual, idx = res.pop("series")
-        i0 = idx[0]
-        i1 = min(len(t), idx[min(len(idx) - 1, 3 if axis != "yaw" else 1)] + int(2.0 / 0.001))
-        images.append(step_png(out_dir, f"{axis}_doublet.png", t[i0 - 500:i1] - t[i0],
-                               np.degrees(cmd[i0 - 500:i1]), np.degrees(actual[i0 - 500:i1]),
+        # one doublet, from 0.5 s before its first edge to 2 s after its last
+        last = idx[min(len(idx) - 1, 3 if axis != "yaw" else 1)]
+        i0 = int(np.searchsorted(t, t[idx[0]] - 0.5))
+        i1 = int(np.searchsorted(t, t[last] + 2.0))
+        images.append(step_png(out_dir, f"{axis}_doublet.png", t[i0:i1] - t[idx[0]],
+                               np.degrees(cmd[i0:i1]), np.degrees(actual[i0:i1]),
                                title=f"{axis}: doublet, command vs true", ylabel="deg"))
         axes_out[axis] = {"step": res["step"], "doublet": res["doublet"], "steps": res["steps"],
                           **({"note": note} if note else {})}
