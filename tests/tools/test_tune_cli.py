@@ -80,3 +80,21 @@ def test_bad_axis_and_bad_param_are_refused(capsys):
     assert rc == 2 and "--axis" in err
     rc, _, err = _tune(capsys, "sysid", "--axis", "roll", "--param", "ATC_RAT_RLL_P=99")
     assert rc == 2 and "ATC_RAT_RLL_P" in err
+
+
+def test_tune_sysid_json_and_report(tmp_path, capsys):
+    rc, out, err = _tune(capsys, "sysid", "--axis", "pitch", "--inject", "both", "--jobs", "2",
+                         "--f-start", "1", "--t-rec", "25", "--fade-in", "3",
+                         "--out", str(tmp_path), "--json")
+    assert rc == 0, err
+    d = json.loads(out)
+    s = d["axes"]["pitch"]
+    for key in ("phase_margin_deg", "gain_margin_db", "crossover_hz", "bandwidth_hz",
+                "delay_margin_ms"):
+        assert key in s
+    assert 20.0 < s["phase_margin_deg"] < 90.0 and 1.0 < s["crossover_hz"] < 20.0
+    assert 2.0 < s["bandwidth_hz"] < 40.0
+    assert s["plant_vs_model"]["max_gain_err_db"] < 2.0
+    for f in ("index.html", "report.md", "pitch_plant.png", "pitch_open_loop.png",
+              "pitch_closed_loop.png", "pitch_sensitivity.png"):
+        assert (tmp_path / f).exists(), f
