@@ -220,3 +220,19 @@ class FlightCore:
         """Back to power-on state (disarmed, targets cleared); parameters kept."""
         self._c.reset()
 
+
+    # ---- system identification (SID_* parameters, fc_sysid.h) --------------
+
+    def sysid_start(self) -> None:
+        """Start the SID_* frequency sweep now (as entering ArduCopter's SYSTEMID mode)."""
+        if self._c.sysid_start() != _core.FC_OK:
+            raise InputError("the sweep cannot start: set SID_AXIS (1-13) and SID_F_START_HZ, "
+                             "SID_F_STOP_HZ > 0, SID_T_REC longer than 2 / SID_F_START_HZ")
+
+    def sysid_stop(self) -> None:
+        self._c.sysid_stop()
+
+    def sysid_sample(self) -> tuple:
+        """(sim_ns, active, axis, t_s, sample, freq_hz, runs, rate_target x3 [rad/s],
+        rate x3 [rad/s], pid_out x3 [us], mixer_in x3 [us]) of the latest step."""
+        return self._c.sysid_sample()

@@ -31,6 +31,7 @@ COMMANDS = {
     "shm-bench": "cmd_shm_bench",
     "fc-bench": "cmd_fc_bench",
     "clean": "cmd_clean",
+    "tune": "cmd_tune",
 }
 
 

@@ -131,6 +131,14 @@ static void derive_configs(fc_core_t *c)
         ((p->pilot_speed_dn > 0.0f) ? p->pilot_speed_dn : p->pilot_speed_up) * 0.01f;
     c->alt_cfg.hover_throttle = p->mot_thst_hover;
 
+    c->sysid_cfg.axis = (uint8_t)p->sid_axis; /* range 0..13 (fc_params.def) */
+    c->sysid_cfg.magnitude = p->sid_magnitude;
+    c->sysid_cfg.f_start_hz = p->sid_f_start_hz;
+    c->sysid_cfg.f_stop_hz = p->sid_f_stop_hz;
+    c->sysid_cfg.t_fade_in_s = p->sid_t_fade_in;
+    c->sysid_cfg.t_rec_s = p->sid_t_rec;
+    c->sysid_cfg.t_fade_out_s = p->sid_t_fade_out;
+
     c->loop_period_s = 1.0f / (float)p->sb_loop_hz;
     c->pwm_period_ns = 1000000000LL / (int64_t)p->sb_pwm_hz;
 }
@@ -193,9 +201,11 @@ static void reset_controllers(fc_core_t *c, bool reset_mixer)
     if (reset_mixer) {
         fc_mixer_reset(&c->mixer, &c->mix_cfg);
     }
+    fc_sysid_stop(&c->sysid); /* arming, disarming, landing: no sweep carries over */
     for (int i = 0; i < 3; i++) {
         c->att_err_frd_rad[i] = 0.0f;
         c->rate_target_frd_rad_s[i] = 0.0f;
+        c->pid_out_us[i] = 0.0f;
     }
     c->trim_us[0] = 0.0f;
     c->trim_us[1] = 0.0f;
@@ -226,6 +236,8 @@ void fc_core_reset(fc_core_t *c)
     fc_alt_ctrl_init(&c->alt_ctrl, &c->alt_cfg, pwm_period_s(c));
     fc_gnss_aid_reset(&c->gnss_aid);
     c->gnss_aid_count = 0;
+    fc_sysid_t sid = {0};
+    c->sysid = sid;
     reset_controllers(c, true);
 
     c->have_imu = false;
@@ -338,6 +350,18 @@ fc_status_t fc_core_set_accel_ref(fc_core_t *c, const float accel_ned_m_s2[3])
     return fc_mahony_set_accel_ref(&c->ahrs, accel_ned_m_s2);
 }
 
+/* ---- system identification ---------------------------------------------- */
+
+fc_status_t fc_core_sysid_start(fc_core_t *c)
+{
+    return fc_sysid_start(&c->sysid, &c->sysid_cfg, c->last_imu_ns) ? FC_OK : FC_ERR_ARG;
+}
+
+void fc_core_sysid_stop(fc_core_t *c)
+{
+    fc_sysid_stop(&c->sysid);
+}
+
 /* ---- the rate loop (decimated IMU rate) -------------------------------- */
 
 static bool gt_fresh(int64_t now_ns, int64_t gt_ns, bool have)
@@ -345,17 +369,33 @@ static bool gt_fresh(int64_t now_ns, int64_t gt_ns, bool have)
     return have && now_ns - gt_ns <= FC_GT_STALE_NS && gt_ns - now_ns <= FC_GT_STALE_NS;
 }
 
-/* Attitude stage: (shaped) target -> blended error e -> rate targets. */
-static void run_attitude(fc_core_t *c, float w, float dt_s, float e[3])
+/* A SYSTEMID sample on the attitude inputs (SID_AXIS 1-6): [rad] or [rad/s]. */
+static float sysid_on(const fc_core_t *c, uint8_t axis_a, uint8_t axis_b, float sid)
 {
-    const float roll_t = fc_constrainf(c->in.roll_target_rad, -c->angle_max_rad, c->angle_max_rad);
-    const float pitch_t =
-        fc_constrainf(c->in.pitch_target_rad, -c->angle_max_rad, c->angle_max_rad);
+    const uint8_t a = c->sysid.axis;
+    return (c->sysid.active && (a == axis_a || a == axis_b)) ? sid * FC_DEG_TO_RAD_F : 0.0f;
+}
+
+/* Attitude stage: (shaped) target -> blended error e -> rate targets. sid: the
+ * SYSTEMID sample of this step (0 when no sweep runs). */
+static void run_attitude(fc_core_t *c, float w, float dt_s, float e[3], float sid)
+{
+    const float roll_t = fc_constrainf(
+        c->in.roll_target_rad + sysid_on(c, FC_SID_INPUT_ROLL, FC_SID_RECOVER_ROLL, sid),
+        -c->angle_max_rad, c->angle_max_rad);
+    const float pitch_t = fc_constrainf(
+        c->in.pitch_target_rad + sysid_on(c, FC_SID_INPUT_PITCH, FC_SID_RECOVER_PITCH, sid),
+        -c->angle_max_rad, c->angle_max_rad);
     const bool hold_yaw = c->in.yaw_hold != 0 && c->att_cfg.ang_p[2] > 0.0f;
-    const float yaw_rate_ff = (c->in.yaw_hold != 0) ? 0.0f : c->in.yaw_rate_target_rad_s;
+    const float yaw_rate_ff = ((c->in.yaw_hold != 0) ? 0.0f : c->in.yaw_rate_target_rad_s)
+                              + sysid_on(c, FC_SID_INPUT_YAW, FC_SID_RECOVER_YAW, sid);
+    /* The "recovery" axes excite the raw command path (ArduCopter turns its
+     * body-frame feed-forward off for them). */
+    const bool recover = c->sysid.active && c->sysid.axis >= FC_SID_RECOVER_ROLL
+                         && c->sysid.axis <= FC_SID_RECOVER_YAW;
     float euler[3];
     fc_quat_to_euler(c->ahrs.q_wxyz, euler);
-    if (c->shaper_cfg.enable) {
+    if (c->shaper_cfg.enable && !recover) {
         if (c->spool != FC_SPOOL_FLIGHT) {
             /* On the ground, as ArduCopter's make_safe_ground_handling: the
              * heading target rests on the vehicle's heading, while roll and
@@ -412,8 +452,21 @@ static void run_rate_loop(fc_core_t *c, float dt_s)
         c->rate_frd_rad_s[i] =
             c->ins.gyro_frd_rad_s[i] - (c->ahrs.bias_rad_s[i] - c->ahrs.integ_rad_s[i]);
     }
+    /* SYSTEMID: ends by itself, and (as ArduCopter) when the tilt passes ANGLE_MAX. */
+    const float sid = fc_sysid_update(&c->sysid, &c->sysid_cfg, c->last_imu_ns);
+    if (c->sysid.active) {
+        float eul[3];
+        fc_quat_to_euler(c->ahrs.q_wxyz, eul);
+        if (fabsf(eul[0]) > c->angle_max_rad || fabsf(eul[1]) > c->angle_max_rad) {
+            fc_sysid_stop(&c->sysid);
+        }
+    }
     float e[3];
-    run_attitude(c, w, dt_s, e);
+    run_attitude(c, w, dt_s, e, sid);
+    if (c->sysid.active && c->sysid.axis >= FC_SID_RATE_ROLL
+        && c->sysid.axis <= FC_SID_RATE_YAW) {
+        c->rate_target_frd_rad_s[c->sysid.axis - FC_SID_RATE_ROLL] += sid * FC_DEG_TO_RAD_F;
+    }
 
     const bool flying = c->spool == FC_SPOOL_FLIGHT;
     const bool integrate = flying && c->airborne;
@@ -427,6 +480,11 @@ static void run_rate_loop(fc_core_t *c, float dt_s)
         if (!integrate) {
             fc_rate_pid_reset_integrator(&c->pid[i]); /* no ground wind-up */
         }
+        c->pid_out_us[i] = out_us[i];
+    }
+    if (c->sysid.active && c->sysid.axis >= FC_SID_MIX_ROLL && c->sysid.axis <= FC_SID_MIX_YAW) {
+        const int i = c->sysid.axis - FC_SID_MIX_ROLL;
+        out_us[i] += sid * c->pid_cfg[i].out_us_per_unit;
     }
     fc_trim_update(&c->trim, &c->trim_cfg, c->airborne != 0, e[0], e[1], dt_s, c->trim_us);
 
@@ -761,6 +819,9 @@ fc_status_t fc_core_pwm_step(fc_core_t *c, int64_t tick_ns, uint16_t pwm_us[FC_M
                                              cos_tilt, (sat & FC_SAT_THR_HIGH) != 0,
                                              (sat & FC_SAT_THR_LOW) != 0, dt_s);
         c->throttle_us = c->mix_cfg.pwm_min_us + thr * range_us;
+        if (c->sysid.active && c->sysid.axis == FC_SID_MIX_THROTTLE) {
+            c->throttle_us += c->sysid.sample * range_us;
+        }
     } else if (c->spool == FC_SPOOL_GROUND_IDLE) {
         c->throttle_us = c->mix_cfg.pwm_min_us + p->mot_spin_arm * range_us;
     } else {

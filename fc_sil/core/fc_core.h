@@ -43,6 +43,7 @@
 #include "fc_rate_pid.h"
 #include "fc_shaper.h"
 #include "fc_status.h"
+#include "fc_sysid.h"
 #include "fc_trim.h"
 
 /* One snapshot per PWM tick: what logs, PID_TUNING and tests read. The
@@ -119,6 +120,7 @@ typedef struct fc_core {
     fc_trim_config_t trim_cfg;
     fc_mixer_config_t mix_cfg;
     fc_alt_ctrl_config_t alt_cfg;
+    fc_sysid_config_t sysid_cfg;
     float angle_max_rad;
     float loop_period_s;
     int64_t pwm_period_ns;
@@ -135,6 +137,8 @@ typedef struct fc_core {
     fc_alt_ctrl_t alt_ctrl;
     fc_gnss_aid_t gnss_aid;   /* IMU history for the GNSS-aided tilt correction */
     uint32_t gnss_aid_count;  /* GNSS fixes that corrected the tilt so far */
+    fc_sysid_t sysid;         /* SYSTEMID sweep (SID_*) */
+    float pid_out_us[3];      /* rate-loop outputs before a mixer-input sweep [us] */
 
     bool ahrs_ground;     /* ahrs runs the ground configuration */
 
@@ -207,6 +211,13 @@ fc_status_t fc_core_gt_att_step(fc_core_t *c, int64_t sim_ns, const float q_wxyz
 fc_status_t fc_core_gt_nav_step(fc_core_t *c, int64_t sim_ns, const float pos_ned_m[3],
                                 const float vel_ned_m_s[3]);
 fc_status_t fc_core_gnss_step(fc_core_t *c, const fc_gnss_store_t *fix);
+
+/* System identification (fc_sysid.h): start a SID_* sweep at the next rate-loop
+ * step (FC_ERR_ARG when SID_AXIS is 0 or the sweep parameters cannot run), or
+ * stop it. The sweep also stops by itself at its end, on disarming and when
+ * the tilt exceeds ANGLE_MAX, as ArduCopter's SYSTEMID mode does. */
+fc_status_t fc_core_sysid_start(fc_core_t *c);
+void fc_core_sysid_stop(fc_core_t *c);
 
 /* PWM: is a tick due (time <= latest IMU)? Then step it; fills c->status. */
 bool fc_core_pwm_due(const fc_core_t *c, int64_t *tick_ns);

@@ -81,4 +81,9 @@ PyObject *fc_ext_attach_io(CoreObject *self, PyObject *args);
 PyObject *fc_ext_poll_io(CoreObject *self, PyObject *unused);
 void fc_ext_detach_io(CoreObject *self);
 
+/* sysidmethods.c: Core methods sysid_start, sysid_stop, sysid_sample. */
+PyObject *fc_ext_sysid_start(CoreObject *self, PyObject *noargs);
+PyObject *fc_ext_sysid_stop(CoreObject *self, PyObject *noargs);
+PyObject *fc_ext_sysid_sample(CoreObject *self, PyObject *noargs);
+
 #endif /* FC_CORE_OBJECT_H */

@@ -852,6 +852,11 @@ static PyMethodDef Core_methods[] = {
      "pwm_bound(records) -> most PWM ticks step_batch(records) can emit."},
     {"step_batch", (PyCFunction)Core_step_batch, METH_VARARGS,
      "step_batch(records, pwm_out, status_out) -> ticks emitted."},
+    {"sysid_start", (PyCFunction)fc_ext_sysid_start, METH_NOARGS,
+     "Start the SID_* sweep -> status code (FC_ERR_ARG: SID_AXIS 0 or bad sweep)."},
+    {"sysid_stop", (PyCFunction)fc_ext_sysid_stop, METH_NOARGS, "Stop the sweep."},
+    {"sysid_sample", (PyCFunction)fc_ext_sysid_sample, METH_NOARGS,
+     "Sweep state and rate-loop signals of the latest step (sysidmethods.c)."},
     {NULL, NULL, 0, NULL},
 };
 
