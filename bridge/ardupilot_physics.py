@@ -6,7 +6,7 @@ drive the lockstep rules directly:
 - a new frame_count: hold the four motor PWMs for one physics step
   (Simulator.dt_ns, 1 ms) and answer with the state after it. SITL advances
   its clock by the difference of our timestamps, so its clock is ours
-  whatever its SIM_RATE_HZ; we pass SIM_RATE_HZ 1000 (tools/sitl_ardupilot.py)
+  whatever its SIM_RATE_HZ; we pass SIM_RATE_HZ 1000 (tools/autopilots/sitl_ardupilot.py)
   so its scheduler also expects 1 kHz frames, and say so once if a packet
   announces another rate.
 - the same frame_count again: SITL resent its servos after a 1 s wait for a

@@ -23,7 +23,7 @@ import math
 from collections import deque
 
 from silbridge.bridge.noise import NormalRows
-from silbridge.mavlink import hil_quant
+from silbridge.mavlink.hil import hil_quant
 
 
 def due_ns(m: int, rate_hz: float) -> int:

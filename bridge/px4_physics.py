@@ -4,7 +4,7 @@ No sockets here (bridge/px4_server.py owns the link), so tests drive the rules d
 
 A PX4 step is 1/STEP_HZ (4 ms at PX4's 250 Hz IMU_INTEG_RATE) = `substeps` physics steps of
 the Simulator (1 ms each) under the same motor outputs (zero-order hold); the step's frames
-(mavlink/px4_hil.py) carry time_usec = the sim time at its end, which becomes PX4's clock.
+(mavlink/hil/px4_hil.py) carry time_usec = the sim time at its end, which becomes PX4's clock.
 
 Lockstep accounting, per reply (HIL_ACTUATOR_CONTROLS): PX4 stamps it with its clock, which
 the newest HIL_SENSOR set, so a reply whose time_usec is the last step sent answers that
@@ -12,7 +12,7 @@ step (`answered`); one older than that was sent before PX4 read the newest step 
 its motors are taken, no step is made). `unanswered` counts steps the server made without an
 answer (a reply that never came within the stall limit; lockstep broken, reported).
 
-The sink (the run log, tools/ardupilot_log.py's ArduPilotLogSink serves both foreign
+The sink (the run log, tools/autopilots/ardupilot_log.py's ArduPilotLogSink serves both foreign
 autopilots) gets step(records, pwm_record, sim) for every physics step and timing(...) once
 per PX4 step: PWM time [sim ns], reply arrival, physics done, frames sent [monotonic wall ns]
 and the wall interval since the previous reply. Both come after the step's HIL_SENSOR is
@@ -26,7 +26,7 @@ import time
 
 import numpy as np
 
-from silbridge.mavlink.px4_hil import (
+from silbridge.mavlink.hil.px4_hil import (
     MODE_ARMED,
     MOTORS,
     STEP_HZ,

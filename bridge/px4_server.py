@@ -27,9 +27,9 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
-from silbridge.mavlink.hil_channel import HilListener
-from silbridge.mavlink.hil_errors import HilPeerLost
-from silbridge.mavlink.px4_hil import CMD_SET_MESSAGE_INTERVAL
+from silbridge.mavlink.hil.hil_channel import HilListener
+from silbridge.mavlink.hil.hil_errors import HilPeerLost
+from silbridge.mavlink.hil.px4_hil import CMD_SET_MESSAGE_INTERVAL
 
 from .runner_errors import PeerLost, StartupCheckFailed
 

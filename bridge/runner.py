@@ -2,7 +2,7 @@
 
 `BridgeLoop` owns one physics step at a time (publish_step / collect_pwm) so
 the same code serves every driver: lockstep or real time, with the FC in
-another process or interleaved in this one (tools/cmd_fly.py). It never
+another process or interleaved in this one (tools/cli/cmd_fly.py). It never
 imports the FC: they meet only through the shared-memory segment.
 
 Lockstep follows shm/lockstep.py: publish step k, wait for FC_SIM_NS >= t_k,

@@ -160,7 +160,7 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
 
     stop: anything with a `requested` attribute (and `name`), read once per step; when it
     turns true the run ends at that step as if its duration were over, the FC is told
-    (STOP = STOP_INTERRUPTED) and the result says `interrupted` (tools/stop_signals.py).
+    (STOP = STOP_INTERRUPTED) and the result says `interrupted` (tools/loop/stop_signals.py).
     """
     loop = BridgeLoop(sim, seg, sink=sink, settle_s=cfg.settle_s,
                       trace=cfg.trace_hash)

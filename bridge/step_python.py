@@ -30,7 +30,7 @@ import math
 from silbridge.bridge import step_buffer as sb
 from silbridge.bridge.frames import ned_to_frd, quat_from_euler
 from silbridge.bridge.lowrate import due_ns
-from silbridge.mavlink.hil_quant import pressure_pa
+from silbridge.mavlink.hil.hil_quant import pressure_pa
 from silbridge.shm.records import FLAG_STEP_END
 
 # Getter order (JSBSim property nodes' get_double_value): rates, forces, Euler, velocity

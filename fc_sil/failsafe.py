@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.vehicle_api import CopterMode
+from silbridge.mavlink.gcs.vehicle_api import CopterMode
 from silbridge.shm.records import Kind
 
 CRIT = mav.MAV_SEVERITY_CRITICAL

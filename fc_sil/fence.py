@@ -2,7 +2,7 @@
 
 Fences (FENCE_TYPE bits): 1 max altitude above home (FENCE_ALT_MAX), 2 circle about home
 (FENCE_RADIUS), 4 the uploaded inclusion/exclusion polygons and circles (mission type FENCE,
-mavlink/geo_store.py), 8 min altitude (FENCE_ALT_MIN). The vehicle must stay inside every
+mavlink/gcs/geo_store.py), 8 min altitude (FENCE_ALT_MIN). The vehicle must stay inside every
 inclusion shape (inside any one of them with FENCE_OPTIONS bit 1) and outside every exclusion.
 
 Checked every outer-loop step, armed or not (a breach on the ground fails the pre-arm check
@@ -28,8 +28,8 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.geo_store import FENCE_CIRCLE
-from silbridge.mavlink.vehicle_api import CopterMode
+from silbridge.mavlink.gcs.geo_store import FENCE_CIRCLE
+from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 ALT_MAX, CIRCLE, POLYGON, ALT_MIN = 1, 2, 4, 8
 BACKUP_M = 20.0                 # AC_FENCE_*_BACKUP_DISTANCE (copter)

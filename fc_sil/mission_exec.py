@@ -1,6 +1,6 @@
 """Mission execution for AUTO: the items of the MissionStore (home at seq 0), one at a time.
 
-Supported (mavlink/mission_store.py accepts exactly these): NAV_TAKEOFF (z = altitude),
+Supported (mavlink/gcs/mission_store.py accepts exactly these): NAV_TAKEOFF (z = altitude),
 NAV_WAYPOINT (p1 = hold time s; lat/lon 0 = here), NAV_LOITER_TIME (p1 = time s),
 NAV_LAND (lat/lon 0 = here), NAV_RETURN_TO_LAUNCH, DO_CHANGE_SPEED (p2 = m/s, -1 = keep).
 Altitudes: relative frames above home, absolute frames above mean sea level (home altitude
@@ -19,7 +19,7 @@ import math
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.vehicle_api import CopterMode
+from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 from .modes import RtlSequence
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from silbridge.mavlink.vehicle_api import CopterMode
+from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 
 class Mode:

@@ -1,6 +1,6 @@
 """Rally points: where RTL goes instead of home (ArduPilot AP_Rally, as ArduCopter 4.6 uses it).
 
-The uploaded rally list (mission type RALLY, mavlink/geo_store.py) holds MAV_CMD_NAV_RALLY_POINT
+The uploaded rally list (mission type RALLY, mavlink/gcs/geo_store.py) holds MAV_CMD_NAV_RALLY_POINT
 items. When RTL starts (the mode, a failsafe, a fence breach or a mission's RTL item) it flies
 to ``rtl_destination``: the rally point nearest the vehicle, skipping points farther than
 RALLY_LIMIT_KM from home (0 = no limit); with RALLY_INCL_HOME 1 home wins when it is closer

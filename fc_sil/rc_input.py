@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from silbridge.mavlink.vehicle_api import CopterMode
+from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 N_CHANNELS = 16
 MODE_EDGES_US = (1230, 1360, 1490, 1620, 1749)

@@ -296,7 +296,7 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print, stop=_NeverSt
 
     Returns the FC summary (with "interrupted": the signal that stopped this process, or
     "bridge" when the bridge's run was interrupted, else None). Raises FcLost when the
-    bridge dies mid-run. stop: anything with `requested` and `name` (tools/stop_signals.py).
+    bridge dies mid-run. stop: anything with `requested` and `name` (tools/loop/stop_signals.py).
     """
     seg = loop.seg
     dt_ns = seg.word(ls.PHYSICS_DT_NS) or 1_000_000

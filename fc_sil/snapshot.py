@@ -1,7 +1,7 @@
 """build_snapshot(vehicle): the VehicleSnapshot the GCS server's telemetry reads.
 
 Built once per outer-loop step on the vehicle thread and published with one reference swap
-(mavlink/vehicle_api.py). Everything comes from the FC's own view: the C core's status row
+(mavlink/gcs/vehicle_api.py). Everything comes from the FC's own view: the C core's status row
 (attitude, rates, PID terms, PWM, altitude), the position estimator, the GNSS receiver's last
 fix, the battery model, the pilot input, the mode and failsafe state.
 
@@ -19,7 +19,7 @@ import math
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.vehicle_api import (CopterMode, NavControllerOutput, PidTuningRow, SensorBit,
+from silbridge.mavlink.gcs.vehicle_api import (CopterMode, NavControllerOutput, PidTuningRow, SensorBit,
                                            VehicleSnapshot)
 from silbridge.shm.records import Kind
 

@@ -34,7 +34,7 @@ import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.vehicle_api import CopterMode
+from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 from . import modes as M
 from .battery import BatteryModel

@@ -15,7 +15,7 @@ import math
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.vehicle_api import CopterMode
+from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 from .prearm import prearm_failure
 
@@ -135,7 +135,7 @@ class GcsCommands:
         self.mission.set_items(items, self)
         if self.mission_file:
             from silbridge.mavlink.errors import MissionFileError
-            from silbridge.mavlink.wpl import save_wpl
+            from silbridge.mavlink.gcs.wpl import save_wpl
             try:
                 save_wpl(self.mission_file, items)
             except (MissionFileError, OSError) as exc:
@@ -149,7 +149,7 @@ class GcsCommands:
             self.rally.set_items(items)
         if self.mission_file:
             from silbridge.mavlink.errors import MissionFileError
-            from silbridge.mavlink.wpl import geo_file, save_wpl
+            from silbridge.mavlink.gcs.wpl import geo_file, save_wpl
             try:
                 save_wpl(geo_file(self.mission_file, mission_type), items)
             except (MissionFileError, OSError) as exc:

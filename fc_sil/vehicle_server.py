@@ -32,17 +32,17 @@ class MavlinkOptions:
     mission_file: str | None = None                 # --mission FILE (QGC WPL 110; fence and
                                                     # rally in FILE.fence / FILE.rally)
     serve: bool = True                              # False: the vehicle without a server
-    tlog: str | None = None                         # --tlog FILE: the GCS traffic (mavlink/tlog.py)
+    tlog: str | None = None                         # --tlog FILE: the GCS traffic (mavlink/gcs/tlog.py)
 
 
 def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None = None,
                           sink=None, out=None) -> Vehicle:
     from silbridge.mavlink.errors import MissionFileError, ParamFileError
-    from silbridge.mavlink.mission_store import MissionStore, home_item
-    from silbridge.mavlink.params_file import load_into_store
-    from silbridge.mavlink.server import GcsServer
-    from silbridge.mavlink.geo_store import GeoStore
-    from silbridge.mavlink.wpl import geo_file, load_wpl
+    from silbridge.mavlink.gcs.mission_store import MissionStore, home_item
+    from silbridge.mavlink.gcs.params_file import load_into_store
+    from silbridge.mavlink.gcs.server import GcsServer
+    from silbridge.mavlink.gcs.geo_store import GeoStore
+    from silbridge.mavlink.gcs.wpl import geo_file, load_wpl
 
     store = CoreParamStore(core)
     problems: list[str] = []
@@ -92,7 +92,7 @@ def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None 
         sysid = int(store.get("SYSID_THISMAV")[0])
         tlog = None
         if opts.tlog:       # opened first: a bad path fails before any socket is open
-            from silbridge.mavlink.tlog import TlogWriter
+            from silbridge.mavlink.gcs.tlog import TlogWriter
             tlog = TlogWriter(opts.tlog)
         try:
             server = GcsServer(vehicle, store, opts.endpoints or None, sysid=sysid, compid=1,

@@ -15,7 +15,7 @@ import argparse
 import ipaddress
 from dataclasses import dataclass
 
-from .errors import EndpointError
+from silbridge.mavlink.errors import EndpointError
 
 KINDS = ("udpout", "udpin", "tcpin")
 DEFAULT_GCS_URLS = ("udpout:127.0.0.1:14550", "udpout:127.0.0.1:14540")

@@ -19,9 +19,9 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from .endpoints import Endpoint
-from .errors import EndpointError
-from .framing import FrameDecoder, RxCounters
+from silbridge.mavlink.endpoints import Endpoint
+from silbridge.mavlink.errors import EndpointError
+from silbridge.mavlink.framing import FrameDecoder, RxCounters
 
 UDP_MAX_READS_PER_POLL = 256      # bound the work per wake-up so telemetry keeps its schedule
 TCP_MAX_OUT_BYTES = 256 * 1024

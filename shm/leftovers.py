@@ -14,7 +14,7 @@ holds no data anyone needs, only memory (tmpfs pages count as RAM).
   process ($SILBRIDGE_OWNER_TAG, usually empty), so a test that made a stale
   segment on purpose a moment ago, or another team's job, is left alone.
 
-`silbridge clean` (tools/cmd_clean.py) lists and removes them by hand.
+`silbridge clean` (tools/cli/cmd_clean.py) lists and removes them by hand.
 """
 
 from __future__ import annotations

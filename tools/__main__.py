@@ -1,5 +1,5 @@
 import sys
 
-from silbridge.tools.cli import main
+from silbridge.tools.cli.cli import main
 
 sys.exit(main())

@@ -10,7 +10,7 @@ Altitude and climb are positive up (NED down negated).
 import numpy as np
 import pytest
 
-from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.fc_sil.status import SPOOL_FLIGHT, SPOOL_GROUND_IDLE
 from silbridge.shm import records as R
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from silbridge.fc_sil import STATUS_DTYPE
-from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.fc_sil.errors import InputError
 from silbridge.fc_sil.status import SPOOL_GROUND_IDLE, SPOOL_SHUT_DOWN
 from silbridge.shm import records as R

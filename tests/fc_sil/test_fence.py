@@ -13,7 +13,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 from silbridge.fc_sil.fence import Geofence
 from silbridge.fc_sil.pos_est import GeoOrigin
 from silbridge.fc_sil.rally import RallyPoints
-from silbridge.mavlink.vehicle_api import CopterMode, MissionItem
+from silbridge.mavlink.gcs.vehicle_api import CopterMode, MissionItem
 
 ORIGIN = GeoOrigin(-353632621, 1491652374, 584.0)
 PARAMS = {"FENCE_ENABLE": 1, "FENCE_TYPE": 7, "FENCE_ACTION": 1, "FENCE_ALT_MAX": 100.0,

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from silbridge.fc_sil import blocks as B
-from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.shm import records as R
 
 G = 9.80665

@@ -9,7 +9,7 @@ import pytest
 
 from silbridge.fc_sil import _core
 from silbridge.fc_sil import params as P
-from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.fc_sil.errors import ParamError
 
 C_TYPES = {0: "FLOAT", 1: "INT8", 2: "INT16", 3: "INT32"}

@@ -6,7 +6,7 @@ import pytest
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 from silbridge.fc_sil import STATUS_DTYPE
-from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.fc_sil.runtime import FcLoop
 from silbridge.shm import Segment
 from silbridge.shm import lockstep as ls

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from silbridge.fc_sil import blocks as B
-from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.flight_core import FlightCore
 
 LOOP_HZ = 8000.0
 DT = 1.0 / LOOP_HZ

@@ -12,7 +12,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 from vehicle_harness import DroppingCore, fly_scripted  # noqa: E402
 
-from silbridge.mavlink.vehicle_api import CopterMode  # noqa: E402
+from silbridge.mavlink.gcs.vehicle_api import CopterMode  # noqa: E402
 from silbridge.shm.records import Kind  # noqa: E402
 
 ACCEPTED, FAILED = mav.MAV_RESULT_ACCEPTED, mav.MAV_RESULT_FAILED

@@ -17,7 +17,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 from vehicle_harness import fly_scripted  # noqa: E402
 
-from silbridge.mavlink.vehicle_api import CopterMode, MissionItem  # noqa: E402
+from silbridge.mavlink.gcs.vehicle_api import CopterMode, MissionItem  # noqa: E402
 
 ACCEPTED = mav.MAV_RESULT_ACCEPTED
 
@@ -182,7 +182,7 @@ def test_alt_hold_follows_the_throttle_stick_and_holds_when_centred():
 
 
 def test_guided_velocity_target_stops_after_guid_timeout():
-    from silbridge.mavlink.vehicle_api import PositionTarget
+    from silbridge.mavlink.gcs.vehicle_api import PositionTarget
 
     st = {}
 
@@ -241,7 +241,7 @@ def test_loiter_sticks_move_then_brake_stops_and_holds():
 
 
 def test_stabilize_manual_throttle_and_global_int_target_in_guided():
-    from silbridge.mavlink.vehicle_api import PositionTarget
+    from silbridge.mavlink.gcs.vehicle_api import PositionTarget
 
     st = {}
 

@@ -16,7 +16,7 @@ from vehicle_harness import fly_scripted  # noqa: E402
 
 from silbridge.fc_sil.pilot import PilotInput  # noqa: E402
 from silbridge.fc_sil.rc_input import ModeSwitch, RcConfig, switch_position  # noqa: E402
-from silbridge.mavlink.vehicle_api import CopterMode  # noqa: E402
+from silbridge.mavlink.gcs.vehicle_api import CopterMode  # noqa: E402
 
 ACCEPTED = 0        # MAV_RESULT_ACCEPTED
 NO = 65535          # RC_CHANNELS_OVERRIDE: leave the channel as it is

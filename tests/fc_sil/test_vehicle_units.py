@@ -10,7 +10,7 @@ import pytest
 
 from silbridge.fc_sil import params as P
 from silbridge.fc_sil.battery import BatteryConfig, BatteryModel
-from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.fc_sil.nav_pos import PosController, PosGains, accel_to_lean, sqrt_controller
 from silbridge.fc_sil.nav_wp import WaypointNav, WpSpeeds
 from silbridge.fc_sil.param_store import CoreParamStore

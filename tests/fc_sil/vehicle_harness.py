@@ -12,11 +12,11 @@ import math
 import os
 
 from silbridge.bridge.runner_main import prepare_segment, run_bridge
-from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.fc_sil.runtime import FcLoop
 from silbridge.fc_sil.vehicle import Vehicle
 from silbridge.shm import Segment
-from silbridge.tools.flight import FlightOptions, bridge_config, make_simulator
+from silbridge.tools.loop.flight import FlightOptions, bridge_config, make_simulator
 
 FT_M = 0.3048
 

@@ -13,7 +13,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from mavtest_client import GcsClient  # noqa: E402
 from mavtest_vehicle import DeclaredParamStore, KinematicVehicle  # noqa: E402
 
-from silbridge.mavlink.server import GcsServer, ServerTiming  # noqa: E402
+from silbridge.mavlink.gcs.server import GcsServer, ServerTiming  # noqa: E402
 
 
 class Env:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.vehicle_api import (CopterMode, PidTuningRow, SensorBit, VehicleSnapshot)
+from silbridge.mavlink.gcs.vehicle_api import (CopterMode, PidTuningRow, SensorBit, VehicleSnapshot)
 
 T = mav  # short alias for MAV_PARAM_TYPE_*
 

@@ -6,7 +6,7 @@ import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.vehicle_api import CopterMode
+from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 
 def test_ack_echoes_sender_and_unknown_is_unsupported(env):

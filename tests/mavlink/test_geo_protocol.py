@@ -12,8 +12,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from mavtest_client import GcsClient, wait_until
 
-from silbridge.mavlink.geo_store import GeoStore, check_list
-from silbridge.mavlink.vehicle_api import MissionItem
+from silbridge.mavlink.gcs.geo_store import GeoStore, check_list
+from silbridge.mavlink.gcs.vehicle_api import MissionItem
 
 FENCE, RALLY = mav.MAV_MISSION_TYPE_FENCE, mav.MAV_MISSION_TYPE_RALLY
 G = mav.MAV_FRAME_GLOBAL_INT

@@ -12,13 +12,13 @@ import pytest
 from silbridge.bridge.runner import PeerWatch
 from silbridge.bridge.runner_errors import PeerLost
 from silbridge.fc_sil.runtime import FcLost, run_fc
-from silbridge.mavlink.hil_codec import UPD_IMU
-from silbridge.mavlink.hil_errors import HilInputError, HilPeerLost
-from silbridge.mavlink.hil_transport import open_bridge_end
+from silbridge.mavlink.hil.hil_codec import UPD_IMU
+from silbridge.mavlink.hil.hil_errors import HilInputError, HilPeerLost
+from silbridge.mavlink.hil.hil_transport import open_bridge_end
 from silbridge.shm import lockstep as ls
 from silbridge.shm.records import PWM_DTYPE, RECORD_DTYPE
-from silbridge.tools.flight import FlightOptions, bridge_config, make_fc_loop, make_simulator
-from silbridge.tools.transport_wiring import bridge_address, fc_segment, guard_fc
+from silbridge.tools.loop.flight import FlightOptions, bridge_config, make_fc_loop, make_simulator
+from silbridge.tools.loop.transport_wiring import bridge_address, fc_segment, guard_fc
 
 
 class Rig:

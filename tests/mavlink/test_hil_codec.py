@@ -1,5 +1,5 @@
 """HIL codec round trip: simulator records -> MAVLink HIL frames -> records, exact where the
-codec promises it (mavlink/hil_codec.py, hil_pwm.py), on a real simulator's output."""
+codec promises it (mavlink/hil/hil_codec.py, hil_pwm.py), on a real simulator's output."""
 
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ import pytest
 
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
-from silbridge.mavlink import hil_quant
+from silbridge.mavlink.hil import hil_quant
 from silbridge.mavlink.framing import FrameDecoder, RxCounters
-from silbridge.mavlink.hil_channel import make_codec
-from silbridge.mavlink.hil_codec import SensorDecoder, SensorEncoder
-from silbridge.mavlink.hil_pwm import PwmDecoder, PwmEncoder
+from silbridge.mavlink.hil.hil_channel import make_codec
+from silbridge.mavlink.hil.hil_codec import SensorDecoder, SensorEncoder
+from silbridge.mavlink.hil.hil_pwm import PwmDecoder, PwmEncoder
 from silbridge.shm.records import DTYPES, PWM_DTYPE, RECORD_DTYPE, Kind
 
 ORIGIN = (473977420, 85455940, 488000)

@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from silbridge.mavlink.hil_channel import HilListener, make_codec
-from silbridge.mavlink.hil_codec import UPD_ABS_PRESSURE, UPD_IMU, UPD_MAG, UPD_TEMPERATURE
-from silbridge.mavlink.hil_pwm import FLAG_LOCKSTEP
+from silbridge.mavlink.hil.hil_channel import HilListener, make_codec
+from silbridge.mavlink.hil.hil_codec import UPD_ABS_PRESSURE, UPD_IMU, UPD_MAG, UPD_TEMPERATURE
+from silbridge.mavlink.hil.hil_pwm import FLAG_LOCKSTEP
 from silbridge.shm import lockstep as ls
-from silbridge.tools.flight import make_fc_loop
-from silbridge.tools.transport_wiring import fc_segment
+from silbridge.tools.loop.flight import make_fc_loop
+from silbridge.tools.loop.transport_wiring import fc_segment
 
 
 def test_px4_style_simulator_gets_one_answer_per_sensor_step():

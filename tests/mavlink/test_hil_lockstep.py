@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from silbridge.tools.flight import FlightOptions, fly_one_process, fly_two_processes
+from silbridge.tools.loop.flight import FlightOptions, fly_one_process, fly_two_processes
 
 # S4: scripted attitude setpoints from the start, so SETPOINT records cross the link too.
 _BASE = dict(scenario="S4", duration_s=1.5, seed=11, lockstep=True)

@@ -14,9 +14,9 @@ import threading
 
 import pytest
 
-from silbridge.mavlink.hil_errors import HilConnectError
-from silbridge.mavlink.hil_serial import parse_serial
-from silbridge.tools.flight import FlightOptions, fly_two_processes
+from silbridge.mavlink.hil.hil_errors import HilConnectError
+from silbridge.mavlink.hil.hil_serial import parse_serial
+from silbridge.tools.loop.flight import FlightOptions, fly_two_processes
 
 CLI = [sys.executable, "-m", "silbridge.tools"]
 _FLIGHT = ["--scenario", "S4", "--duration", "1.5", "--seed", "11", "--lockstep"]

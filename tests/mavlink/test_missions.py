@@ -10,8 +10,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from mavtest_client import wait_until
 
-from silbridge.mavlink.vehicle_api import CopterMode, MissionItem
-from silbridge.mavlink.wpl import load_wpl, save_wpl
+from silbridge.mavlink.gcs.vehicle_api import CopterMode, MissionItem
+from silbridge.mavlink.gcs.wpl import load_wpl, save_wpl
 
 G = mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
 

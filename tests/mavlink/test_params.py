@@ -7,8 +7,8 @@ import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.params_file import load_parm
-from silbridge.mavlink.server import ServerTiming
+from silbridge.mavlink.gcs.params_file import load_parm
+from silbridge.mavlink.gcs.server import ServerTiming
 
 
 def _set(client, name, value, ptype=mav.MAV_PARAM_TYPE_REAL32):
@@ -147,7 +147,7 @@ def test_preflight_storage_save_and_load(make_env, tmp_path):
 def test_load_into_store_at_start(tmp_path):
     from mavtest_vehicle import DeclaredParamStore
 
-    from silbridge.mavlink.params_file import load_into_store
+    from silbridge.mavlink.gcs.params_file import load_into_store
     store = DeclaredParamStore()
     assert load_into_store(tmp_path / "absent.parm", store) == []
     (tmp_path / "p.parm").write_text("RTL_ALT 2500\nATC_RAT_RLL_P 3\n")

@@ -10,7 +10,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 from mavtest_client import wait_until
 from mavtest_vehicle import DeclaredParamStore, KinematicVehicle
 
-from silbridge.mavlink.vehicle_api import ParamStore, VehicleCommands
+from silbridge.mavlink.gcs.vehicle_api import ParamStore, VehicleCommands
 
 
 def test_test_vehicle_implements_the_protocols():

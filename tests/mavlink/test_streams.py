@@ -7,7 +7,7 @@ import collections
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.vehicle_api import SensorBit
+from silbridge.mavlink.gcs.vehicle_api import SensorBit
 
 M = mav
 

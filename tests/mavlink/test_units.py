@@ -9,16 +9,18 @@ import os
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink import ftp, telemetry
+from silbridge.mavlink.gcs import ftp
+
+from silbridge.mavlink.gcs import telemetry
 from silbridge.mavlink.errors import MissionFileError, ParamFileError
 from silbridge.mavlink.framing import FrameDecoder, RxCounters
-from silbridge.mavlink.mission_store import MissionStore, check_item
-from silbridge.mavlink.param_types import coerce
-from silbridge.mavlink.params_file import (apply_parm, format_value, load_parm, parse_parm,
+from silbridge.mavlink.gcs.mission_store import MissionStore, check_item
+from silbridge.mavlink.gcs.param_types import coerce
+from silbridge.mavlink.gcs.params_file import (apply_parm, format_value, load_parm, parse_parm,
                                            save_parm, save_store)
-from silbridge.mavlink.streams import StreamSchedule
-from silbridge.mavlink.vehicle_api import MissionItem, VehicleSnapshot
-from silbridge.mavlink.wpl import format_wpl, parse_wpl
+from silbridge.mavlink.gcs.streams import StreamSchedule
+from silbridge.mavlink.gcs.vehicle_api import MissionItem, VehicleSnapshot
+from silbridge.mavlink.gcs.wpl import format_wpl, parse_wpl
 
 from mavtest_vehicle import DeclaredParamStore
 
@@ -165,7 +167,7 @@ def test_encoders_survive_odd_snapshots():
 
 
 def test_bench_runs(capsys):
-    from silbridge.mavlink import bench
+    from silbridge.mavlink.gcs import bench
     import json
     assert bench.main(["--json", "--seconds", "0.2"]) == 0
     res = json.loads(capsys.readouterr().out)

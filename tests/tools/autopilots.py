@@ -27,7 +27,7 @@ sys.path.insert(0, HERE)
 
 from sitl_helpers import SitlVehicle, free_udp_port  # noqa: E402
 
-from silbridge.tools.sitl_ardupilot import (ENV_BINARY, MAVLINK_TCP_BASE, PORT_STRIDE,  # noqa: E402
+from silbridge.tools.autopilots.sitl_ardupilot import (ENV_BINARY, MAVLINK_TCP_BASE, PORT_STRIDE,  # noqa: E402
                                             pick_instance, stop_sitl)
 
 KINDS = ("silbridge", "arducopter")

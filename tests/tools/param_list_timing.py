@@ -29,8 +29,8 @@ from mavtest_vehicle import DeclaredParamStore, KinematicVehicle, ParamDecl  # n
 from test_param_scale import _decls  # noqa: E402
 
 from silbridge.fc_sil import params as P  # noqa: E402
-from silbridge.mavlink.params_file import apply_parm, load_parm, save_store  # noqa: E402
-from silbridge.mavlink.server import GcsServer  # noqa: E402
+from silbridge.mavlink.gcs.params_file import apply_parm, load_parm, save_store  # noqa: E402
+from silbridge.mavlink.gcs.server import GcsServer  # noqa: E402
 
 REPEAT = 5
 

@@ -22,8 +22,8 @@ from silbridge.bridge.px4_physics import Px4Physics
 from silbridge.bridge.px4_server import Px4HilServer
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
-from silbridge.mavlink.hil_channel import make_codec
-from silbridge.tools import sitl_px4 as sp
+from silbridge.mavlink.hil.hil_channel import make_codec
+from silbridge.tools.autopilots import sitl_px4 as sp
 
 FIXTURE = Path(__file__).with_name("px4_exchange.json")
 

@@ -1,4 +1,4 @@
-"""`python -m silbridge.tools.ardupilot_speed`: the same ArduCopter binary on its own physics
+"""`python -m silbridge.tools.autopilots.ardupilot_speed`: the same ArduCopter binary on its own physics
 and on ours, side by side. The figures depend on the machine: only that both are measured and
 reported (and the per-packet profile) is checked, never a speed."""
 
@@ -17,7 +17,7 @@ pytestmark = pytest.mark.skipif(
 
 
 def test_speed_tool_prints_both_speeds_and_the_ratio():
-    p = subprocess.run([sys.executable, "-m", "silbridge.tools.ardupilot_speed", "--skip", "2",
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools.autopilots.ardupilot_speed", "--skip", "2",
                         "--span", "3", "--flight", "0", "--json"],
                        capture_output=True, text=True, timeout=150)
     assert p.returncode == 0, p.stderr[-2000:]
@@ -33,6 +33,6 @@ def test_speed_tool_prints_both_speeds_and_the_ratio():
 
 def test_speed_tool_without_a_binary_says_how_to_get_one(tmp_path):
     env = dict(os.environ, SILBRIDGE_ARDUCOPTER=str(tmp_path / "missing"))
-    p = subprocess.run([sys.executable, "-m", "silbridge.tools.ardupilot_speed", "--json"],
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools.autopilots.ardupilot_speed", "--json"],
                        capture_output=True, text=True, timeout=60, env=env)
     assert p.returncode == 2 and "waf copter" in p.stderr and "Traceback" not in p.stderr

@@ -1,4 +1,4 @@
-"""The two attitude scorings (tools/att_scoring.py) on synthetic logs with known answers.
+"""The two attitude scorings (tools/benchmark/att_scoring.py) on synthetic logs with known answers.
 
 The synthetic run's true roll is 5 deg + 3 sin(pi t) deg and its /fc/status
 target 5 deg (our FC's shaped target). A scenario command of 0 deg on
@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 
 from silbridge.shm.records import Kind
-from silbridge.tools.att_scoring import target_clock_offset_ns
-from silbridge.tools.fc_target import FC_TARGET_DTYPE, TARGET_CHANNEL, CommandLog, TargetFeed
-from silbridge.tools.log_synth import synthetic_run, write_run
-from silbridge.tools.mcap_log import LogWriter, read_log
-from silbridge.tools.metrics import Windows, compute_metrics
+from silbridge.tools.benchmark.att_scoring import target_clock_offset_ns
+from silbridge.tools.logs.fc_target import FC_TARGET_DTYPE, TARGET_CHANNEL, CommandLog, TargetFeed
+from silbridge.tools.logs.log_synth import synthetic_run, write_run
+from silbridge.tools.logs.mcap_log import LogWriter, read_log
+from silbridge.tools.benchmark.metrics import Windows, compute_metrics
 
 WIN = Windows(warmup=(0, 1), transient=(1, 2), analysis=(2, 12), yaw=(8, 12))
 AMP, CMD = 3.0, 5.0
@@ -105,8 +105,8 @@ def test_command_log_writes_setpoint_records_on_change_only(tmp_path):
 def test_our_fc_s4_rows_are_scored_from_its_log_like_any_fc(tmp_path):
     """A real S4 flight of our FC: both scorings recomputed by hand from its log's
     /setpoint (command), /fc/status att_target_rad (its shaped target) and /gt_att."""
-    from silbridge.tools.att_scoring import roll_pitch_from_quat
-    from silbridge.tools.campaign import make_specs, run_one
+    from silbridge.tools.benchmark.att_scoring import roll_pitch_from_quat
+    from silbridge.tools.benchmark.campaign import make_specs, run_one
 
     spec = make_specs(["S4"], 1, 17.0, tmp_path, windows=((0, 10), (10, 17), (10, 17),
                                                           (10, 17)))[0]

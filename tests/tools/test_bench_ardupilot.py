@@ -33,13 +33,13 @@ from silbridge.bridge import ardupilot_json as apj
 from silbridge.bridge.ardupilot_physics import ArduPilotPhysics
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
-from silbridge.tools.ardupilot_flight import BenchStepHooks
-from silbridge.tools.ardupilot_log import SOURCE_ATTITUDE_TARGET, ArduPilotLogSink, AttitudeTarget
-from silbridge.tools.ardupilot_setpoints import SetpointForwarder, thrust_for_climb
-from silbridge.tools.integrity import check_log
-from silbridge.tools.mcap_log import read_log
-from silbridge.tools.metrics import Windows, compute_metrics
-from silbridge.tools.sitl_ardupilot import (
+from silbridge.tools.autopilots.ardupilot_flight import BenchStepHooks
+from silbridge.tools.autopilots.ardupilot_log import SOURCE_ATTITUDE_TARGET, ArduPilotLogSink, AttitudeTarget
+from silbridge.tools.autopilots.ardupilot_setpoints import SetpointForwarder, thrust_for_climb
+from silbridge.tools.logs.integrity import check_log
+from silbridge.tools.logs.mcap_log import read_log
+from silbridge.tools.benchmark.metrics import Windows, compute_metrics
+from silbridge.tools.autopilots.sitl_ardupilot import (
     COPTER_MODE_GUIDED,
     MavlinkDriver,
     find_arducopter,
@@ -347,7 +347,7 @@ def test_mavlink_driver_sets_guided_arms_takes_off_and_reads_the_target():
                     reason="set SILBRIDGE_ARDUCOPTER to an arducopter SITL binary to fly it "
                            "end to end (none on this machine; see README 'ArduCopter SITL')")
 def test_arducopter_arms_takes_off_and_hovers_30_s(tmp_path):
-    from silbridge.tools.campaign import make_specs, run_one
+    from silbridge.tools.benchmark.campaign import make_specs, run_one
 
     spec = make_specs(["S1"], 1, 30.0, tmp_path, fc="ardupilot",
                       sitl=find_arducopter(), variant="ardupilot",
@@ -375,7 +375,7 @@ def test_arducopter_arms_takes_off_and_hovers_30_s(tmp_path):
                     reason="set SILBRIDGE_ARDUCOPTER to an arducopter SITL binary to fly S4's "
                            "doublets end to end (none on this machine)")
 def test_arducopter_flies_the_s4_roll_doublet(tmp_path):
-    from silbridge.tools.campaign import make_specs, run_one
+    from silbridge.tools.benchmark.campaign import make_specs, run_one
 
     spec = make_specs(["S4"], 1, 17.0, tmp_path, fc="ardupilot", sitl=find_arducopter(),
                       variant="ardupilot",
@@ -389,7 +389,7 @@ def test_arducopter_flies_the_s4_roll_doublet(tmp_path):
     assert st["att_target_rad"][:, 0].max() == pytest.approx(amp_rad, rel=1e-5)
     # ArduCopter's own (shaped) target and the true roll follow the command.
     assert np.nanmax(st["ap_target_rad"][:, 0]) > 0.8 * amp_rad
-    from silbridge.tools.metrics import roll_pitch_from_quat
+    from silbridge.tools.benchmark.metrics import roll_pitch_from_quat
     roll, _ = roll_pitch_from_quat(log.channels["/gt_att"]["q_wxyz"])
     assert roll.max() > 0.7 * amp_rad and roll.min() < -0.7 * amp_rad
     # Scored both ways: its controller tracks its own shaped target (ATTITUDE_TARGET at
@@ -416,7 +416,7 @@ def fake_sitl_binary(tmp_path) -> str:
 
 def test_bench_run_with_a_stand_in_sitl_logs_from_take_off(tmp_path, fake_sitl_binary):
     """run_one --fc ardupilot end to end: process, ports, MAVLink driving, log, metrics."""
-    from silbridge.tools.campaign import make_specs, run_one
+    from silbridge.tools.benchmark.campaign import make_specs, run_one
 
     spec = make_specs(["S1"], 1, 6.0, tmp_path, fc="ardupilot", sitl=fake_sitl_binary,
                       variant="ardupilot",
@@ -438,7 +438,7 @@ def test_bench_run_forwards_the_s4_doublet_to_the_stand_in(tmp_path, fake_sitl_b
     """S4's roll doublet, moved to 2 s after take-off, reaches the stand-in ArduCopter as
     SET_ATTITUDE_TARGET at >= 10 Hz of sim time, GUIDED, rates ignored, thrust = hold; the
     log scores the command we sent and times the JSON link."""
-    from silbridge.tools.campaign import make_specs, run_one
+    from silbridge.tools.benchmark.campaign import make_specs, run_one
 
     text = (Path(apj.__file__).parent / "scenarios" / "S4.toml").read_text()
     text = text.replace("start_s = 10.0", "start_s = 2.0").replace("repeat = 6", "repeat = 1")

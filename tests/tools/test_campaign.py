@@ -9,9 +9,9 @@ import sys
 import pytest
 
 from silbridge.fc_sil.params import ABLATION_FEATURES, FEATURES
-from silbridge.tools.ablation import feature_params, variants
-from silbridge.tools.campaign import make_specs, run_campaign
-from silbridge.tools.table1 import aggregate, markdown
+from silbridge.tools.benchmark.ablation import feature_params, variants
+from silbridge.tools.benchmark.campaign import make_specs, run_campaign
+from silbridge.tools.benchmark.table1 import aggregate, markdown
 
 SHORT = dict(runs=2, duration_s=12.0)
 WINDOWS = ((0.0, 5.0), (5.0, 7.0), (7.0, 12.0), (9.0, 12.0))
@@ -58,7 +58,7 @@ def test_ablation_variants_switch_real_parameters():
     assert feature_params(["d_filter"]) == {"SB_DFILT_EN": 0}   # the documented names
     with pytest.raises(ValueError, match="unknown feature"):
         feature_params(["warp_drive"])
-    from silbridge.fc_sil.core import FlightCore
+    from silbridge.fc_sil.flight_core import FlightCore
     core = FlightCore()
     for name in FEATURES.values():
         assert core.get_param(name) == 1   # every switch exists in the FC and defaults on
@@ -84,7 +84,7 @@ def test_bench_refuses_bad_arguments(tmp_path):
 
 
 def test_table_cells_never_show_a_negative_zero():
-    from silbridge.tools.table1 import _cell
+    from silbridge.tools.benchmark.table1 import _cell
     assert _cell({"mean": -0.0003, "std": 0.0004}, "{:.2f}") == "0.00 ± 0.00"
     assert _cell({"mean": -0.3, "std": 0.1}, "{:.2f}") == "-0.30 ± 0.10"
     assert _cell(None, "{:.2f}") == "n/a"

@@ -11,7 +11,7 @@ import time
 import pytest
 
 from silbridge.shm import remove_stale
-from silbridge.tools.flight import FlightOptions, fly_one_process, fly_two_processes
+from silbridge.tools.loop.flight import FlightOptions, fly_one_process, fly_two_processes
 
 
 def _opts(**kw) -> FlightOptions:
@@ -100,9 +100,9 @@ def test_oversampled_imu_in_lockstep_loses_nothing(imu_hz):
 
 @pytest.mark.parametrize("processes", [1, 2])
 def test_fly_log_is_complete_and_analyzable(tmp_path, processes):
-    from silbridge.tools.integrity import check_log
-    from silbridge.tools.mcap_log import read_log
-    from silbridge.tools.metrics import Windows, compute_metrics
+    from silbridge.tools.logs.integrity import check_log
+    from silbridge.tools.logs.mcap_log import read_log
+    from silbridge.tools.benchmark.metrics import Windows, compute_metrics
 
     log_path = tmp_path / f"run{processes}.mcap"
     fly = fly_one_process if processes == 1 else fly_two_processes

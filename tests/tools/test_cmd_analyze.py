@@ -6,8 +6,8 @@ import sys
 
 import pytest
 
-from silbridge.tools.log_synth import synthetic_run, write_run
-from silbridge.tools.mcap_log import LogWriter
+from silbridge.tools.logs.log_synth import synthetic_run, write_run
+from silbridge.tools.logs.mcap_log import LogWriter
 
 
 def _analyze(*args):
@@ -66,7 +66,7 @@ def test_log_missing_whole_channels_is_refused_in_one_line(good_log, tmp_path):
 def test_unfinished_log_of_a_killed_run_is_analyzed_up_to_its_end(tmp_path):
     """A writer killed mid-run (file cut inside a record, no summary): analyze reads it
     without --force, says where each channel ends, and computes the metrics over it."""
-    from silbridge.tools.log_synth import step_slices
+    from silbridge.tools.logs.log_synth import step_slices
 
     run = synthetic_run(6.0, roll_err_amp_deg=2.0, pwm_amp_us=10.0)
     path = tmp_path / "whole.mcap"
@@ -94,8 +94,14 @@ def test_unfinished_log_of_a_killed_run_is_analyzed_up_to_its_end(tmp_path):
     assert "missing at the end (of 6 s planned)" in text and "/imu" in text
 
 
-def test_damaged_log_still_needs_force(good_log, tmp_path):
-    data = bytearray(good_log.read_bytes())
+def test_damaged_log_still_needs_force(tmp_path):
+    # Without the viewable /viz channels, which the analysis skips unread, so the flipped
+    # byte lands inside an analysis batch whatever the log's layout.
+    run = synthetic_run(6.0, roll_err_amp_deg=2.0, pwm_amp_us=10.0)
+    plain = tmp_path / "plain.mcap"
+    with LogWriter(plain, metadata=run.metadata, viz_hz=0) as w:
+        write_run(run, w)
+    data = bytearray(plain.read_bytes())
     data[len(data) // 3] ^= 0xFF          # a flipped byte inside a batch: its CRC fails
     bad = tmp_path / "damaged.mcap"
     bad.write_bytes(bytes(data))

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from silbridge.tools.integrity import check_log, inspect_log
-from silbridge.tools.log_synth import synthetic_run, write_run
-from silbridge.tools.mcap_log import LogWriter, read_log
+from silbridge.tools.logs.integrity import check_log, inspect_log
+from silbridge.tools.logs.log_synth import synthetic_run, write_run
+from silbridge.tools.logs.mcap_log import LogWriter, read_log
 
 
 def _log(tmp_path, run, name="run.mcap", **kw):

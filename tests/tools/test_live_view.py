@@ -28,7 +28,7 @@ from mcap.records import Schema
 from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoders
 from mcap_ros2.decoder import DecoderFactory as Ros2Decoders
 
-from silbridge.tools.viz_log import CHANNELS
+from silbridge.tools.logs.viz_log import CHANNELS
 
 websockets = pytest.importorskip("websockets")
 

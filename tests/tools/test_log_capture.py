@@ -4,9 +4,9 @@ flight must give the same log, /timing rows included (but their wall-clock value
 
 import numpy as np
 
-import silbridge.tools.run_log as run_log
-from silbridge.tools import flight
-from silbridge.tools.mcap_log import read_log
+import silbridge.tools.loop.run_log as run_log
+from silbridge.tools.loop import flight
+from silbridge.tools.logs.mcap_log import read_log
 
 
 class _PlainSink:

@@ -16,8 +16,8 @@ sys.path.insert(0, os.path.dirname(__file__))
 from sitl_helpers import SitlVehicle, free_udp_port, gcs_for, wait_for  # noqa: E402
 
 from silbridge.fc_sil import params as P  # noqa: E402
-from silbridge.mavlink.wpl import load_wpl  # noqa: E402
-from silbridge.tools.cli import main  # noqa: E402
+from silbridge.mavlink.gcs.wpl import load_wpl  # noqa: E402
+from silbridge.tools.cli.cli import main  # noqa: E402
 
 
 def _run(capsys, *argv):

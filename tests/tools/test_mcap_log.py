@@ -11,8 +11,8 @@ import pytest
 from mcap.reader import make_reader
 
 from silbridge.shm.records import RECORD_DTYPE, Kind, empty
-from silbridge.tools.log_synth import SYNTH_STATUS_DTYPE, synthetic_run, write_run
-from silbridge.tools.mcap_log import TIMING_DTYPE, LogError, LogWriter, read_log
+from silbridge.tools.logs.log_synth import SYNTH_STATUS_DTYPE, synthetic_run, write_run
+from silbridge.tools.logs.mcap_log import TIMING_DTYPE, LogError, LogWriter, read_log
 
 
 @pytest.fixture(scope="module")
@@ -118,7 +118,7 @@ def test_unknown_record_kinds_are_counted_not_logged(tmp_path, run):
     log = read_log(path)
     assert len(log.channels["/imu"]) == 9
     assert log.end["unknown_records"] == {"0": 1}
-    from silbridge.tools.integrity import check_log
+    from silbridge.tools.logs.integrity import check_log
     assert any("1 records of unknown kind 0" in p for p in check_log(log))
 
 
@@ -131,7 +131,7 @@ def test_reading_some_channels_only(tmp_path, run):
 
 
 def test_write_cycle_equals_the_separate_calls(tmp_path, run):
-    from silbridge.tools.log_synth import step_slices
+    from silbridge.tools.logs.log_synth import step_slices
     paths = [tmp_path / "cycle.mcap", tmp_path / "separate.mcap"]
     steps = step_slices(run)[:1500]
     for path in paths:
@@ -266,9 +266,9 @@ def test_not_an_mcap_file_is_refused(tmp_path):
 
 _WRITER_SCRIPT = r"""
 import sys, time, numpy as np
-from silbridge.tools.log_synth import synthetic_run, step_slices
+from silbridge.tools.logs.log_synth import synthetic_run, step_slices
 from silbridge.shm.records import RECORD_DTYPE
-from silbridge.tools.mcap_log import LogWriter
+from silbridge.tools.logs.mcap_log import LogWriter
 run = synthetic_run(4.0)
 w = LogWriter(sys.argv[1], metadata=run.metadata, batch_rows=256)
 for k, step in enumerate(step_slices(run)):

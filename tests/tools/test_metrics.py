@@ -1,13 +1,13 @@
-"""Metrics on synthetic logs whose answers are known on paper (tools/log_synth.py)."""
+"""Metrics on synthetic logs whose answers are known on paper (tools/logs/log_synth.py)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from silbridge.tools.log_synth import quat_from_euler, synthetic_run, write_run
-from silbridge.tools.mcap_log import LogWriter, read_log
-from silbridge.tools.metrics import Windows, compute_metrics, roll_pitch_from_quat
+from silbridge.tools.logs.log_synth import quat_from_euler, synthetic_run, write_run
+from silbridge.tools.logs.mcap_log import LogWriter, read_log
+from silbridge.tools.benchmark.metrics import Windows, compute_metrics, roll_pitch_from_quat
 
 # A 12 s run; the analysis window holds whole periods of every sine below.
 WIN = Windows(warmup=(0, 1), transient=(1, 2), analysis=(2, 12), yaw=(8, 12))

@@ -21,8 +21,8 @@ from mavtest_vehicle import DeclaredParamStore, KinematicVehicle, ParamDecl  # n
 from sitl_helpers import free_udp_port  # noqa: E402
 
 from silbridge.fc_sil import params as P  # noqa: E402
-from silbridge.mavlink.params_file import apply_parm, load_parm, save_store  # noqa: E402
-from silbridge.mavlink.server import GcsServer  # noqa: E402
+from silbridge.mavlink.gcs.params_file import apply_parm, load_parm, save_store  # noqa: E402
+from silbridge.mavlink.gcs.server import GcsServer  # noqa: E402
 
 N = 1000
 

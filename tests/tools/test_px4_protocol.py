@@ -25,8 +25,8 @@ from silbridge.bridge.px4_physics import Px4Physics
 from silbridge.bridge.px4_server import Px4HilServer
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
-from silbridge.mavlink import px4_hil
-from silbridge.mavlink.hil_channel import make_codec
+from silbridge.mavlink.hil import px4_hil
+from silbridge.mavlink.hil.hil_channel import make_codec
 
 FIXTURE = Path(__file__).with_name("px4_exchange.json")
 
@@ -107,7 +107,7 @@ def test_bridge_sensors_use_px4_field_groups_and_interval(recording):
     assert len(baro) == pytest.approx(100 * span_s, abs=2)     # the scenario's 100 Hz
     assert len(mag) == pytest.approx(100 * span_s, abs=2)
     # Not perfectly noise-free (PX4 flags a frozen sensor STALE and refuses to arm); the
-    # pressure is on the 1/128 hPa grid HIL_SENSOR carries exactly (mavlink/hil_quant.py).
+    # pressure is on the 1/128 hPa grid HIL_SENSOR carries exactly (mavlink/hil/hil_quant.py).
     assert len({m.abs_pressure for m in baro}) >= 4
     assert len({m.xmag for m in mag}) > len(mag) // 2
     for m in baro:

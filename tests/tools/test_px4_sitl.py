@@ -1,7 +1,7 @@
 """The real PX4 v1.15 SITL on our physics, end to end (SILBRIDGE_PX4 names its binary).
 
 - lockstep: PX4 boots on our physics, arms, takes off to 5 m and holds for 10 s of sim time
-  in OFFBOARD (the companion computer's altitude loop, tools/px4_setpoints.py);
+  in OFFBOARD (the companion computer's altitude loop, tools/autopilots/px4_setpoints.py);
 - `silbridge bench --fc px4`: a short run gives a valid log and the 'S1 PX4' rows of Table 1;
 - real time: the same boot, take-off and 10 s hold paced to the wall clock;
 - `silbridge bridge --fc px4` serves a PX4 started by hand (lockstep).
@@ -21,8 +21,8 @@ import tempfile
 import numpy as np
 import pytest
 
-from silbridge.tools.integrity import check_log
-from silbridge.tools.mcap_log import read_log
+from silbridge.tools.logs.integrity import check_log
+from silbridge.tools.logs.mcap_log import read_log
 
 PX4 = os.environ.get("SILBRIDGE_PX4")
 pytestmark = pytest.mark.skipif(
@@ -40,8 +40,8 @@ takeoff_alt_m = 5.0
 
 
 def _fly(tmp_path, *, scenario: str, duration_s: float, realtime: bool = False) -> dict:
-    from silbridge.tools.px4_flight import fly_px4
-    from silbridge.tools.sitl_px4 import find_px4
+    from silbridge.tools.autopilots.px4_flight import fly_px4
+    from silbridge.tools.autopilots.sitl_px4 import find_px4
 
     binary, etc = find_px4(PX4)
     return fly_px4(scenario=scenario, seed=None, duration_s=duration_s,
@@ -121,7 +121,7 @@ def test_px4_takes_off_and_holds_10_s_in_real_time(tmp_path):
 
 
 def test_bridge_fc_px4_serves_a_px4_started_by_hand(tmp_path):
-    from silbridge.tools.sitl_px4 import (
+    from silbridge.tools.autopilots.sitl_px4 import (
         SIM_TCP_BASE,
         find_px4,
         pick_instance,

@@ -1,4 +1,4 @@
-"""The benchmark report page (tools/report_html.py, tools/report.py), parsed as HTML.
+"""The benchmark report page (tools/benchmark/report_html.py, tools/benchmark/report.py), parsed as HTML.
 
 A small real campaign (JSBSim + SIL FC, two scenarios, two runs each) writes its report;
 the page is parsed with the standard library's HTML parser: Table 1 is an HTML table
@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
-from silbridge.tools.campaign import make_specs, run_campaign
-from silbridge.tools.report import write_report
-from silbridge.tools.report_html import table1_html
-from silbridge.tools.table1 import PAPER, ROWS, aggregate, markdown
+from silbridge.tools.benchmark.campaign import make_specs, run_campaign
+from silbridge.tools.benchmark.report import write_report
+from silbridge.tools.benchmark.report_html import table1_html
+from silbridge.tools.benchmark.table1 import PAPER, ROWS, aggregate, markdown
 
 VOID = {"meta", "img", "br", "link", "input", "hr"}
 

@@ -1,4 +1,4 @@
-"""tools/stop_signals.py on its own: a polled stop, an unpolled stop, the second signal."""
+"""tools/loop/stop_signals.py on its own: a polled stop, an unpolled stop, the second signal."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from silbridge.tools.stop_signals import StopRequest
+from silbridge.tools.loop.stop_signals import StopRequest
 
 
 def test_a_polling_loop_gets_a_flag_not_an_exception():
@@ -35,7 +35,7 @@ def test_a_soft_stop_from_a_parent_never_counts_as_a_second_signal():
 
 _SECOND = """
 import signal, sys
-from silbridge.tools.stop_signals import StopRequest
+from silbridge.tools.loop.stop_signals import StopRequest
 stop = StopRequest()
 stop.on_emergency(lambda: print("cleanup ran", flush=True))
 with stop.polling():

@@ -203,7 +203,7 @@ def test_second_ctrl_c_exits_at_once_with_a_readable_log(tmp_path, instance):
 def test_sigkill_keeps_every_channel_to_the_last_second(tmp_path, victim):
     """SIGKILL of each process of a real-time logged run: every channel's rows reach the
     file to within ~1 s of the kill (bound generous: 2 s), analyze reads the log as is."""
-    from silbridge.tools.kill_check import run
+    from silbridge.tools.logs.kill_check import run
 
     res = run(victim, 2.0, tmp_path)
     assert not res["missing_channels"], res

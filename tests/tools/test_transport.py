@@ -9,7 +9,7 @@ import os
 import subprocess
 import sys
 
-from silbridge.tools.transport_bench import imu_steps
+from silbridge.tools.transport.transport_bench import imu_steps
 
 
 def test_imu_steps_1_2_5():

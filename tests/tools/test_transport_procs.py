@@ -1,4 +1,4 @@
-"""The transport comparison's long-lived children (tools/transport_procs.py): one real FC child
+"""The transport comparison's long-lived children (tools/transport/transport_procs.py): one real FC child
 serves several steps (shared memory and TCP, real bridge in this process), reports a failed
 step and keeps serving, and a child that dies or stays silent is reported with its pid and
 status within a bounded time instead of hanging the run. Also the retry rule and the
@@ -14,9 +14,9 @@ import time
 
 import pytest
 
-from silbridge.tools import transport_bench as tb
-from silbridge.tools.transport_load import OthersCpu, machine_busy_s, process_cpu_s
-from silbridge.tools.transport_procs import ChildLost, FcChild, JsonChild
+from silbridge.tools.transport import transport_bench as tb
+from silbridge.tools.transport.transport_load import OthersCpu, machine_busy_s, process_cpu_s
+from silbridge.tools.transport.transport_procs import ChildLost, FcChild, JsonChild
 
 STEP_S = 0.3
 
@@ -110,7 +110,7 @@ def test_others_cpu_sees_a_busy_process_that_is_not_ours():
 
 
 def test_a_runner_whose_fc_child_died_exits_with_the_reason(capfd):
-    cmd = [sys.executable, "-m", "silbridge.tools.transport_child", "runner",
+    cmd = [sys.executable, "-m", "silbridge.tools.transport.transport_child", "runner",
            "--steps", "1000,2000", "--duration", str(STEP_S)]
     with JsonChild(cmd, "the test runner") as runner:
         hello = runner.read_msg(60.0, "starting")

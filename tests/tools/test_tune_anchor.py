@@ -8,8 +8,8 @@ import os
 
 import pytest
 
-from silbridge.fc_sil.core import FlightCore
-from silbridge.tools.tune_anchor import for_our_fc, run_autotune
+from silbridge.fc_sil.flight_core import FlightCore
+from silbridge.tools.tune.tune_anchor import for_our_fc, run_autotune
 
 BINARY = os.environ.get("SILBRIDGE_ARDUCOPTER")
 

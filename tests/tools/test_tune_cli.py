@@ -16,7 +16,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 from sitl_helpers import SitlVehicle, free_udp_port, gcs_for, wait_for  # noqa: E402
 
-from silbridge.tools.cli import main  # noqa: E402
+from silbridge.tools.cli.cli import main  # noqa: E402
 
 
 def _f32(x):

@@ -1,6 +1,6 @@
 """The identification check: a mixer-input sweep on our quad, in a lockstep hover,
 identifies the rate plant (mixer input -> true body rate) that the linearisation of
-the JSBSim model predicts (tools/tune_model.py: inertia, arm, kT, kQ, thrust curve,
+the JSBSim model predicts (tools/tune/tune_model.py: inertia, arm, kT, kQ, thrust curve,
 rotor lag, PWM hold) within 2 dB and 10 deg wherever coherence > 0.9; and the loop
 margins it reads are those of a stable loop."""
 
@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from silbridge.tools.tune_model import plant_agreement
-from silbridge.tools.tune_sysid import SweepConfig, identify
+from silbridge.tools.tune.tune_model import plant_agreement
+from silbridge.tools.tune.tune_sysid import SweepConfig, identify
 
 CFG = SweepConfig(f_start_hz=1.0, t_fade_in_s=3.0, t_rec_s=25.0, sweep_at_s=12.0)
 

@@ -11,7 +11,7 @@ import pytest
 
 control = pytest.importorskip("control")
 
-from silbridge.tools.tune_freq import bandwidth_hz, margins  # noqa: E402
+from silbridge.tools.tune.tune_freq import bandwidth_hz, margins  # noqa: E402
 
 
 def _frf(sys, f):

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from silbridge.fc_sil.core import FlightCore
+from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.fc_sil.errors import InputError
 from silbridge.fc_sil.params import BY_NAME
 

@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from silbridge.tools.live_view import DEFAULT_PORT, LiveViewError, parse_address
+from silbridge.tools.logs.live_view import DEFAULT_PORT, LiveViewError, parse_address
 
 
 def _fly(*args, tmp_path):

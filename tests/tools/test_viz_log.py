@@ -1,4 +1,4 @@
-"""Viewable channels of a run log (tools/viz_log.py): what Foxglove plots and draws.
+"""Viewable channels of a run log (tools/logs/viz_log.py): what Foxglove plots and draws.
 
 A real closed-loop flight (JSBSim + SIL FC, lockstep) writes its log; the mcap
 package with the ROS 2 and protobuf decoders reads the /viz channels back: one
@@ -19,13 +19,13 @@ from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoders
 from mcap_ros2.decoder import DecoderFactory as Ros2Decoders
 
-from silbridge.tools.foxglove_layout import layout, layout_paths, layout_topics
-from silbridge.tools.integrity import check_log
-from silbridge.tools.log_synth import synthetic_run, write_run
-from silbridge.tools.mcap_log import LogWriter, read_log
-from silbridge.tools.viz_frames import euler_from_quat, ned_to_enu, q_enu_flu, quat_from_euler
-from silbridge.tools.viz_log import CHANNELS, PLOTS
-from silbridge.tools.viz_scene import Scene
+from silbridge.tools.logs.foxglove_layout import layout, layout_paths, layout_topics
+from silbridge.tools.logs.integrity import check_log
+from silbridge.tools.logs.log_synth import synthetic_run, write_run
+from silbridge.tools.logs.mcap_log import LogWriter, read_log
+from silbridge.tools.logs.viz_frames import euler_from_quat, ned_to_enu, q_enu_flu, quat_from_euler
+from silbridge.tools.logs.viz_log import CHANNELS, PLOTS
+from silbridge.tools.logs.viz_scene import Scene
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -75,7 +75,7 @@ stop_s = 11.5
 
 @pytest.fixture(scope="module")
 def flight(tmp_path_factory):
-    from silbridge.tools.flight import FlightOptions, fly_one_process
+    from silbridge.tools.loop.flight import FlightOptions, fly_one_process
     tmp = tmp_path_factory.mktemp("viz")
     (tmp / "viz.toml").write_text(SCENARIO)
     path = tmp / "flight.mcap"
@@ -273,7 +273,7 @@ def test_layout_file_is_generated_and_names_only_channels_that_exist(flight):
     path, _log, _viz = flight
     committed = json.loads((REPO / "docs" / "foxglove_layout.json").read_text())
     assert committed == layout(), \
-        "docs/foxglove_layout.json is stale: python -m silbridge.tools.foxglove_layout > it"
+        "docs/foxglove_layout.json is stale: python -m silbridge.tools.logs.foxglove_layout > it"
     with open(path, "rb") as f:
         summary = make_reader(f).get_summary()
     topics = {c.topic: c for c in summary.channels.values()}

@@ -1,0 +1,105 @@
+"""Which telemetry message goes out how often, per link.
+
+ArduPilot keeps stream rates per channel, so do we: MAVSDK on 14540 asking for ATTITUDE at
+50 Hz does not flood QGC on 14550. Two ways to set a rate, both as ArduCopter 4.5 treats them:
+SET_MESSAGE_INTERVAL (per message; -1 off, 0 back to default) and the older
+REQUEST_DATA_STREAM (per group of messages, rate in Hz, 0 or stop = off).
+
+Messages nobody asked for stay off except the few a GCS needs before it asks anything:
+HEARTBEAT (1 Hz, always sent unprompted), SYS_STATUS, EXTENDED_SYS_STATE, MISSION_CURRENT and
+SYSTEM_TIME at 1 Hz. A link that fell behind (a stalled server thread) skips missed sends
+rather than bursting them.
+"""
+
+from __future__ import annotations
+
+from pymavlink.dialects.v20 import ardupilotmega as mav
+
+from silbridge.mavlink.gcs.telemetry import ENCODERS
+
+M = mav
+DEFAULT_INTERVALS_S: dict[int, float] = {
+    M.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
+    M.MAVLINK_MSG_ID_SYS_STATUS: 1.0,
+    M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 1.0,
+    M.MAVLINK_MSG_ID_MISSION_CURRENT: 1.0,
+    M.MAVLINK_MSG_ID_SYSTEM_TIME: 1.0,
+}
+
+# REQUEST_DATA_STREAM groups (ArduCopter's GCS_MAVLINK_Copter stream lists, our subset).
+STREAM_GROUPS: dict[int, tuple[int, ...]] = {
+    M.MAV_DATA_STREAM_RAW_SENSORS: (M.MAVLINK_MSG_ID_RAW_IMU, M.MAVLINK_MSG_ID_SCALED_PRESSURE),
+    M.MAV_DATA_STREAM_EXTENDED_STATUS: (M.MAVLINK_MSG_ID_SYS_STATUS,
+                                        M.MAVLINK_MSG_ID_MISSION_CURRENT,
+                                        M.MAVLINK_MSG_ID_GPS_RAW_INT,
+                                        M.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT,
+                                        M.MAVLINK_MSG_ID_FENCE_STATUS),
+    M.MAV_DATA_STREAM_POSITION: (M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
+                                 M.MAVLINK_MSG_ID_LOCAL_POSITION_NED),
+    M.MAV_DATA_STREAM_RC_CHANNELS: (M.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW,
+                                    M.MAVLINK_MSG_ID_RC_CHANNELS),
+    M.MAV_DATA_STREAM_EXTRA1: (M.MAVLINK_MSG_ID_ATTITUDE, M.MAVLINK_MSG_ID_PID_TUNING),
+    M.MAV_DATA_STREAM_EXTRA2: (M.MAVLINK_MSG_ID_VFR_HUD,),
+    M.MAV_DATA_STREAM_EXTRA3: (M.MAVLINK_MSG_ID_SYSTEM_TIME, M.MAVLINK_MSG_ID_BATTERY_STATUS,
+                               M.MAVLINK_MSG_ID_VIBRATION, M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
+                               M.MAVLINK_MSG_ID_EKF_STATUS_REPORT),
+}
+
+# Messages that may be streamed (everything with an encoder except the one-shot ones).
+STREAMABLE = frozenset(set(ENCODERS) - {M.MAVLINK_MSG_ID_AUTOPILOT_VERSION})
+# Messages ArduCopter accepts an interval for although this vehicle has nothing to put in them
+# (no rangefinder): ACCEPTED and never sent, as ArduCopter without the sensor. Any other id is
+# DENIED, as ArduCopter answers for messages it cannot send (MAVSDK asks for ALTITUDE,
+# ODOMETRY, ACTUATOR_* and HIL_STATE_QUATERNION and gets COMMAND_DENIED from both).
+NOTHING_TO_SEND = frozenset({M.MAVLINK_MSG_ID_DISTANCE_SENSOR})
+MIN_INTERVAL_S = 0.004        # 250 Hz cap: the vehicle publishes snapshots at 50-100 Hz anyway
+MAX_INTERVAL_S = 3600.0
+
+
+class StreamSchedule:
+    """Per-link message intervals and next send times (seconds, monotonic clock)."""
+
+    def __init__(self, now_s: float):
+        self.intervals_s: dict[int, float] = dict(DEFAULT_INTERVALS_S)
+        self._due_s: dict[int, float] = {mid: now_s for mid in self.intervals_s}
+
+    def set_interval(self, msg_id: int, interval_s: float | None, now_s: float) -> None:
+        """interval_s None or <= 0: off. Clamped to [MIN_INTERVAL_S, MAX_INTERVAL_S]."""
+        if interval_s is None or interval_s <= 0:
+            self.intervals_s.pop(msg_id, None)
+            self._due_s.pop(msg_id, None)
+            return
+        interval_s = min(max(interval_s, MIN_INTERVAL_S), MAX_INTERVAL_S)
+        self.intervals_s[msg_id] = interval_s
+        # first send soon, then on the new period
+        self._due_s[msg_id] = min(self._due_s.get(msg_id, now_s), now_s + interval_s)
+
+    def set_default(self, msg_id: int, now_s: float) -> None:
+        self.set_interval(msg_id, DEFAULT_INTERVALS_S.get(msg_id), now_s)
+
+    def interval_us(self, msg_id: int) -> int:
+        iv = self.intervals_s.get(msg_id)
+        return -1 if iv is None else int(round(iv * 1e6))
+
+    def request_data_stream(self, stream_id: int, rate_hz: int, start: bool, now_s: float) -> None:
+        groups = (list(STREAM_GROUPS) if stream_id == M.MAV_DATA_STREAM_ALL
+                  else [stream_id] if stream_id in STREAM_GROUPS else [])
+        interval = (1.0 / rate_hz) if (start and rate_hz > 0) else None
+        for g in groups:
+            for mid in STREAM_GROUPS[g]:
+                self.set_interval(mid, interval, now_s)
+
+    def due(self, now_s: float) -> list[int]:
+        out = []
+        for mid, t in self._due_s.items():
+            if t <= now_s:
+                out.append(mid)
+                iv = self.intervals_s[mid]
+                t += iv
+                if t <= now_s:            # fell behind: skip, do not burst
+                    t = now_s + iv
+                self._due_s[mid] = t
+        return out
+
+    def next_due_s(self) -> float | None:
+        return min(self._due_s.values()) if self._due_s else None

@@ -1,0 +1,186 @@
+"""The MAVLink driver that flies PX4 SITL as a companion computer would, on its offboard link.
+
+PX4 instance N's API/offboard link ('onboard' mode) listens on UDP 14580+N and sends to
+127.0.0.1:14540+N: the driver binds 14540+N and talks back to 14580+N. In its own thread it
+sends a heartbeat (1 Hz wall), asks for ATTITUDE_TARGET and LOCAL_POSITION_NED at STREAM_HZ
+(sim time), then every RETRY_SIM_S of sim time until the take-off is accepted: arm (PX4
+arms once its pre-flight checks pass, some 10-30 s of sim time after boot), and once armed
+MAV_CMD_NAV_TAKEOFF (altitude: MIS_TAKEOFF_ALT, set to the scenario's). After the take-off,
+`want_offboard()` (from the setpoint forwarder, once it streams) makes it switch PX4 to
+OFFBOARD (MAV_CMD_DO_SET_MODE, custom main mode 6) until the heartbeat says so: PX4 accepts
+the switch only while attitude targets arrive (> 2 Hz), which the forwarder guarantees.
+
+Reported: ATTITUDE_TARGET (PX4's attitude controller target) into `target`, the local
+altitude and climb rate (LOCAL_POSITION_NED), armed state, PX4's main/sub mode, STATUSTEXT.
+`send_attitude_target` is called from the physics thread; every write holds `_tx_lock`.
+"""
+
+from __future__ import annotations
+
+import math
+import select
+import socket
+import threading
+import time
+from collections import deque
+
+from pymavlink.dialects.v20 import ardupilotmega as mav
+
+from silbridge.bridge.ardupilot_physics import euler_from_quat
+
+from silbridge.tools.autopilots.ardupilot_log import SOURCE_ATTITUDE_TARGET
+from silbridge.tools.autopilots.sitl_px4 import OFFBOARD_LOCAL_BASE, OFFBOARD_REMOTE_BASE, Px4Error
+
+STREAM_HZ = 50.0
+RETRY_SIM_S = 2.0
+MODE_RETRY_SIM_S = 0.5
+MAIN_MODE_AUTO, MAIN_MODE_OFFBOARD = 4, 6
+SUB_MODE_TAKEOFF = 2
+
+
+class Px4Driver(threading.Thread):
+    def __init__(self, instance: int, *, sim_time_s, target, on_takeoff, on_takeoff_sent=None,
+                 connect_timeout_s: float = 60.0, target_feed=None, sim_ns=None):
+        super().__init__(daemon=True, name=f"px4-mavlink-{instance}")
+        self.peer = ("127.0.0.1", OFFBOARD_LOCAL_BASE + instance)
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            self.sock.bind(("127.0.0.1", OFFBOARD_REMOTE_BASE + instance))
+        except OSError as e:
+            self.sock.close()
+            raise Px4Error(f"cannot bind PX4's offboard port {OFFBOARD_REMOTE_BASE + instance} "
+                           f"({e.strerror}): another program uses PX4 instance {instance}") from None
+        self.sim_time_s = sim_time_s
+        self.target = target
+        # Each ATTITUDE_TARGET with PX4's stamp and the physics time it was read: the FC-target
+        # channel /fc/target that scores every FC against its own target (tools/logs/fc_target.py).
+        self.target_feed = target_feed
+        self.sim_ns = sim_ns or (lambda: int(self.sim_time_s() * 1e9))
+        self.on_takeoff = on_takeoff
+        self.on_takeoff_sent = on_takeoff_sent or (lambda: None)
+        self.connect_timeout_s = connect_timeout_s
+        self.codec = mav.MAVLink(self, srcSystem=254, srcComponent=191)
+        self.codec.robust_parsing = True
+        self.statustext: deque = deque(maxlen=20)
+        self.error: str | None = None
+        self.sysid: int | None = None
+        self.armed = False
+        self.main_mode = self.sub_mode = None
+        self.took_off = False
+        self.offboard_wanted = False
+        self.alt_m: float | None = None        # LOCAL_POSITION_NED -z
+        self.climb_m_s: float | None = None    # LOCAL_POSITION_NED -vz
+        self.setpoints_sent = 0
+        self._halt = threading.Event()
+        self._tx_lock = threading.Lock()
+
+    # pymavlink "file" interface (always under _tx_lock)
+    def write(self, buf: bytes) -> None:
+        self.sock.sendto(buf, self.peer)
+
+    @property
+    def offboard(self) -> bool:
+        return self.main_mode == MAIN_MODE_OFFBOARD
+
+    def want_offboard(self) -> None:
+        self.offboard_wanted = True
+
+    def send_attitude_target(self, time_boot_ms: int, q_wxyz, thrust: float,
+                             type_mask: int) -> bool:
+        """SET_ATTITUDE_TARGET to PX4, from any thread. False if PX4 has not been heard yet."""
+        if self.sysid is None or self.error is not None:
+            return False
+        try:
+            with self._tx_lock:
+                self.codec.set_attitude_target_send(
+                    int(time_boot_ms) & 0xFFFFFFFF, self.sysid, 1, type_mask,
+                    [float(v) for v in q_wxyz], 0.0, 0.0, 0.0, float(thrust))
+        except OSError as e:
+            self.error = f"sending SET_ATTITUDE_TARGET failed: {e.strerror or e}"
+            return False
+        self.setpoints_sent += 1
+        return True
+
+    def stop(self) -> None:
+        self._halt.set()
+        self.join(3.0)
+
+    def run(self) -> None:
+        try:
+            self._loop()
+        except Exception as e:  # noqa: BLE001 - reported to the flight, which stops the run
+            self.error = str(e) or type(e).__name__
+        finally:
+            self.sock.close()
+
+    def _command(self, command: int, *params) -> None:
+        p = list(params) + [0.0] * (7 - len(params))
+        with self._tx_lock:
+            self.codec.command_long_send(self.sysid, 1, command, 0, *p)
+
+    def _loop(self) -> None:
+        t0 = time.monotonic()
+        next_beat = 0.0
+        next_try = next_mode = None
+        asked = False
+        while not self._halt.is_set():
+            now = time.monotonic()
+            if now >= next_beat:
+                with self._tx_lock:
+                    self.codec.heartbeat_send(mav.MAV_TYPE_ONBOARD_CONTROLLER,
+                                              mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+                next_beat = now + 1.0
+            r, _, _ = select.select([self.sock], [], [], 0.02)
+            if r:
+                data = self.sock.recv(65536)
+                for m in self.codec.parse_buffer(data) or []:
+                    self._handle(m)
+            if self.sysid is None:
+                if now - t0 > self.connect_timeout_s:
+                    raise Px4Error(f"no heartbeat from PX4 on UDP {self.sock.getsockname()[1]} "
+                                   f"in {self.connect_timeout_s:g} s")
+                continue
+            if not asked:
+                for msg_id in (mav.MAVLINK_MSG_ID_ATTITUDE_TARGET,
+                               mav.MAVLINK_MSG_ID_LOCAL_POSITION_NED):
+                    self._command(mav.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / STREAM_HZ)
+                asked = True
+            t = self.sim_time_s()
+            if not self.took_off:
+                if next_try is None or t >= next_try:
+                    next_try = t + RETRY_SIM_S
+                    if not self.armed:
+                        self._command(mav.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+                    else:
+                        self.on_takeoff_sent()
+                        self._command(mav.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, math.nan, math.nan,
+                                      math.nan, math.nan)
+            elif self.offboard_wanted and not self.offboard:
+                if next_mode is None or t >= next_mode:
+                    next_mode = t + MODE_RETRY_SIM_S
+                    self._command(mav.MAV_CMD_DO_SET_MODE, mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                                  MAIN_MODE_OFFBOARD, 0)
+
+    def _handle(self, m) -> None:
+        kind = m.get_type()
+        if kind == "HEARTBEAT":
+            if m.autopilot != mav.MAV_AUTOPILOT_PX4:
+                return
+            self.sysid = m.get_srcSystem()
+            self.armed = bool(m.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED)
+            self.main_mode = (m.custom_mode >> 16) & 0xFF
+            self.sub_mode = (m.custom_mode >> 24) & 0xFF
+        elif kind == "ATTITUDE_TARGET":
+            euler = euler_from_quat(*m.q)
+            self.target.set(*euler, SOURCE_ATTITUDE_TARGET)
+            if self.target_feed is not None:
+                self.target_feed.put(self.sim_ns(), m.time_boot_ms * 1_000_000, *euler)
+        elif kind == "LOCAL_POSITION_NED":
+            self.alt_m, self.climb_m_s = -m.z, -m.vz
+        elif kind == "COMMAND_ACK":
+            if m.command == mav.MAV_CMD_NAV_TAKEOFF and m.result == mav.MAV_RESULT_ACCEPTED \
+                    and not self.took_off:
+                self.took_off = True
+                self.on_takeoff()
+        elif kind == "STATUSTEXT":
+            self.statustext.append(m.text)

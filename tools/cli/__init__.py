@@ -1,0 +1,1 @@
+"""The `silbridge` command line: one module per subcommand; nothing but the command line and tests imports this package."""

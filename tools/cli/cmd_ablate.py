@@ -1,0 +1,85 @@
+"""`silbridge ablate`: the campaign with each stabilisation feature off alone and all off."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from silbridge.tools.benchmark.ablation import variants
+from silbridge.tools.benchmark.campaign import make_specs, run_campaign
+from silbridge.tools.cli.cmd_bench import add_campaign_arguments, campaign_inputs
+from silbridge.tools.benchmark.table1 import ROWS, aggregate, deltas
+
+HELP = "ablation: the campaign with each stabilisation feature off, deltas vs the full FC"
+
+
+def add_arguments(p) -> None:
+    add_campaign_arguments(p)
+    p.set_defaults(runs=5, out="ablate-out")
+
+
+def delta_markdown(full: dict, per_variant: dict) -> str:
+    names = list(full["scenarios"])
+    lines = ["**Ablation**: mean of each metric with the feature off, minus the full "
+             "controller's (same seeds)", ""]
+    for key, label, unit, fmt in ROWS[:5]:
+        head = ["variant"] + [f"{n} Δ{label}" for n in names]
+        lines += [f"*{label} ({unit})*", "", "| " + " | ".join(head) + " |",
+                  "|" + "---|" * len(head)]
+        base = ["full (absolute)"] + [
+            fmt.format(full["scenarios"][n][key]["mean"])
+            if full["scenarios"][n].get(key, {}).get("mean") is not None else "n/a"
+            for n in names]
+        lines.append("| " + " | ".join(base) + " |")
+        for label_v, d in per_variant.items():
+            row = [label_v]
+            for n in names:
+                v = d.get(n, {}).get(key)
+                row.append("n/a" if v is None else ("+" if v >= 0 else "") + fmt.format(v))
+            lines.append("| " + " | ".join(row) + " |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    scenarios, windows, params = campaign_inputs(args)
+    out_dir = Path(args.out)
+    all_specs = []
+    for label, off in variants():
+        all_specs += make_specs(scenarios, args.runs, args.duration, out_dir,
+                                base_seed=args.seed, imu_hz=args.imu_hz, params=params,
+                                features_off=off, variant=label, windows=windows,
+                                keep_logs=args.keep_logs, viz_hz=args.viz_hz)
+    t0 = time.monotonic()
+    results = run_campaign(all_specs, jobs=args.jobs, executor=args.executor,
+                           ray_address=args.ray_address, label="ablate")
+    from silbridge.tools.loop.stop_signals import STOP
+    partial = [r.spec.log_path for r in results
+               if r.summary.get("interrupted") and not r.summary.get("skipped")]
+    results = [r for r in results if not r.summary.get("interrupted")]
+    if STOP.requested:
+        stopped = {"interrupted": STOP.name, "runs_planned": len(all_specs),
+                   "runs_done": len(results), "partial_logs": partial}
+        print(f"ablate: INTERRUPTED by {STOP.name}: {len(results)} of {len(all_specs)} runs "
+              f"finished", file=sys.stderr)
+        if not any(r.spec.variant == "full" for r in results):
+            print(json.dumps(stopped) if args.json else
+                  "ablate: no full-variant run finished: no table")
+            return STOP.exit_code()
+    by_variant: dict[str, list] = {}
+    for r in results:
+        by_variant.setdefault(r.spec.variant, []).append(r)
+    tables = {v: aggregate(rs) for v, rs in by_variant.items()}
+    full = tables["full"]
+    d = {v: deltas(full, t) for v, t in tables.items() if v != "full"}
+    md = delta_markdown(full, d)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "ablation.md").write_text(md + "\n")
+    payload = {"variants": tables, "deltas": d, "wall_s": time.monotonic() - t0,
+               "runs": args.runs, "duration_s": args.duration,
+               **(stopped if STOP.requested else {})}
+    (out_dir / "ablation.json").write_text(json.dumps(payload, indent=2) + "\n")
+    print(json.dumps(payload) if args.json else md)
+    return STOP.exit_code(0)

@@ -1,0 +1,107 @@
+"""`silbridge fc`: the SIL flight-controller program (attaches to a bridge's segment)."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from silbridge.tools.loop.flight import FlightOptions, close_fc_loop, make_fc_loop, mavlink_options
+from silbridge.tools.cli.flight_args import (
+    OptionError,
+    add_fc_arguments,
+    add_mavlink_arguments,
+    add_transport_arguments,
+    add_view_arguments,
+    mavlink_wanted,
+    parse_params,
+)
+from silbridge.tools.loop.stop_signals import STOP
+from silbridge.tools.loop.transport_wiring import fc_segment, guard_fc
+
+HELP = "the SIL FC program: attach to a running bridge and fly its vehicle"
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--instance", default="silbridge",
+                   help="shared-memory instance name of the bridge (default silbridge)")
+    p.add_argument("--attach-timeout", type=float, default=10.0, metavar="S",
+                   help="wait this long for the bridge's segment (default 10 s)")
+    add_transport_arguments(p, listen=False)
+    add_fc_arguments(p)
+    add_mavlink_arguments(p)
+    p.add_argument("--log", default=None, metavar="FILE.mcap",
+                   help="write the run's MCAP log from the FC side")
+    p.add_argument("--log-meta", default=None, metavar="FILE.json",
+                   help="start metadata for --log (config, scenario), as `fly` passes it")
+    add_view_arguments(p)
+    p.add_argument("--json", action="store_true", help="print the FC summary as JSON")
+
+
+def run(args) -> int:
+    from silbridge.fc_sil.runtime import run_fc
+
+    params = parse_params(args.param)
+    out = (lambda s: print(s, file=sys.stderr)) if args.json else print
+    from silbridge.shm import lockstep as ls
+
+    with fc_segment(args.transport, args.instance, hil_addr=args.hil_addr,
+                    timeout_s=args.attach_timeout) as seg:
+        # MAVLink by default when the bridge runs in real time (see add_mavlink_arguments)
+        realtime = seg.word(ls.RUN_MODE) != ls.MODE_LOCKSTEP
+        mav_opts = mavlink_options(FlightOptions(
+            mavlink=mavlink_wanted(args, realtime), gcs_urls=tuple(args.gcs),
+            no_default_gcs=args.no_default_gcs, param_file=args.param_file,
+            mission_file=args.mission_file, tlog=args.tlog))
+        if args.tlog and mav_opts is None:
+            raise OptionError("--tlog logs the MAVLink GCS traffic: fly the MAVLink vehicle "
+                              "(--mavlink) or leave --tlog out")
+        loop = make_fc_loop(seg, params=params, features_off=tuple(args.feature_off),
+                            mavlink=mav_opts, out=out)
+        guard_fc(loop)
+        sink = _open_log(args, loop)
+        summary = None
+        ended = {}
+        try:
+            with STOP.polling():
+                summary = run_fc(loop, out=out, stop=STOP)
+        except BaseException as exc:
+            # The log says why it ends early (analyze then checks it up to there).
+            ended = {"aborted": f"{type(exc).__name__}: {exc}"}
+            raise
+        finally:
+            close_fc_loop(loop)
+            if sink is not None:
+                why = (summary or {}).get("interrupted") or STOP.name
+                sink.close(**({"interrupted": why} if why else ended))
+        if mav_opts is not None:
+            summary["mavlink"] = loop.supervisor.summary()
+    if args.json:
+        print(json.dumps(summary), flush=True)
+    else:
+        lat, jit = summary["latency_us"], summary["jitter_us"]
+        print(f"FC consumed {summary['records']} records in {summary['polls']} polls, "
+              f"published {summary['pwm_published']} PWM")
+        print(f"sensor->FC latency p50 {lat['p50']} us p99 {lat['p99']} us; "
+              f"jitter p50 {jit['p50']} us p99 {jit['p99']} us")
+        if summary.get("interrupted"):
+            print(f"INTERRUPTED ({summary['interrupted']}): a partial run")
+    return STOP.exit_code(0)
+
+
+def _open_log(args, loop):
+    """The FC-side MCAP log of `fc --log` (fly --processes 2 --log passes the metadata)."""
+    if not args.log and args.live is None:
+        return None
+    from silbridge.tools.loop.run_log import open_run_sink
+
+    meta = {}
+    if args.log_meta:
+        with open(args.log_meta) as fh:
+            meta = json.load(fh)
+    meta["params"] = loop.core.params()
+    sink = open_run_sink(args.log, meta, viz_hz=args.viz_hz, live=args.live,
+                         out=lambda s: print(s, file=sys.stderr))
+    loop.sink = sink
+    if getattr(loop.supervisor, "sink", "absent") is None:
+        loop.supervisor.sink = sink
+    return sink

@@ -1,0 +1,358 @@
+"""One closed-loop flight, wired from its parts: the glue under `silbridge
+bridge`, `silbridge fc` and `silbridge fly` (and the campaign runner).
+
+bridge/ and fc_sil/ never import each other; this module (tools/ may use
+everything) builds each side and hands them the shared segment. The summary
+joins what the bridge measured with what the FC measured into the keys the
+issue fixes for `fly --json`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+
+from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
+from silbridge.bridge.scenario import load_scenario
+from silbridge.bridge.simulator import Simulator
+
+from silbridge.tools.loop.stop_signals import STOP
+from silbridge.tools.loop.transport_wiring import (
+    bridge_address,
+    bridge_segment,
+    fc_cli_args,
+    fc_segment,
+    guard_fc,
+    in_process_poll,
+)
+
+_NS = 1_000_000_000
+
+
+@dataclass
+class FlightOptions:
+    scenario: str = "S1"
+    duration_s: float | None = None     # None: the scenario's duration
+    lockstep: bool = True
+    speed: float = 1.0
+    busy_wait: bool = False             # real time: spin between steps, never sleep
+    processes: int = 2
+    imu_hz: float | None = None
+    seed: int | None = None
+    instance: str | None = None
+    log_path: str | None = None
+    params: dict | None = None          # parameter overrides for the FC
+    features_off: tuple = ()            # FC stabilisation features switched off (ablation)
+    mavlink: bool = False               # the MAVLink vehicle (GCS control) instead of AutoFlight
+    gcs_urls: tuple = ()                # extra --gcs endpoints
+    no_default_gcs: bool = False        # leave out udpout 127.0.0.1:14550 and :14540
+    param_file: str | None = None       # --params FILE (.parm)
+    mission_file: str | None = None     # --mission FILE (QGC WPL 110)
+    transport: str = "shm"              # shm | udp | tcp (MAVLink HIL, tools/loop/transport_wiring.py)
+    hil_addr: str | None = None         # udp/tcp: the bridge's listen address (default: any port)
+    viz_hz: float | None = None         # viewable log channels [Hz]; None: VIZ_HZ_DEFAULT; 0: none
+    live: str | None = None             # --live HOST:PORT: serve the viewable channels (Foxglove)
+    tlog: str | None = None             # --tlog FILE: the MAVLink GCS traffic
+
+
+def default_instance() -> str:
+    return f"fly-{os.getpid()}"
+
+
+def make_simulator(opts: FlightOptions):
+    sc = load_scenario(opts.scenario, seed=opts.seed)
+    sim = Simulator(sc, imu_hz=opts.imu_hz)
+    return sc, sim
+
+
+def bridge_config(opts: FlightOptions, sc) -> BridgeRunConfig:
+    duration = opts.duration_s if opts.duration_s is not None else sc.duration_s
+    return BridgeRunConfig(duration_s=duration, lockstep=opts.lockstep, speed=opts.speed,
+                           busy_wait=opts.busy_wait,
+                           settle_s=min(10.0, duration / 2))
+
+
+def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
+                 mavlink=None, out=None):
+    """The FC side: FlightCore with parameters applied, wrapped in an FcLoop.
+
+    mavlink: None for the pre-MAVLink AutoFlight (scenario setpoints, auto-arm), or a
+    fc_sil.vehicle_server.MavlinkOptions: the MAVLink vehicle (disarmed, GCS control only);
+    close it with close_fc_loop(loop)."""
+    from silbridge.fc_sil.autoflight import AutoFlight
+    from silbridge.fc_sil.flight_core import FlightCore
+    from silbridge.fc_sil.runtime import FcLoop
+
+    from silbridge.tools.benchmark.ablation import feature_params
+
+    core = FlightCore()
+    overrides = {**(params or {}), **feature_params(features_off)}
+    if mavlink is not None:
+        from silbridge.fc_sil.vehicle_server import start_mavlink_vehicle
+        vehicle = start_mavlink_vehicle(core, mavlink, overrides=overrides, sink=sink, out=out)
+        return FcLoop(core, seg, supervisor=vehicle, sink=sink)
+    for name, value in overrides.items():
+        core.set_param(name, value)
+    return FcLoop(core, seg, supervisor=AutoFlight(core, sink=sink), sink=sink)
+
+
+def mavlink_options(opts: FlightOptions):
+    """The MavlinkOptions of a flight, or None when the MAVLink vehicle is off."""
+    if not opts.mavlink:
+        return None
+    from silbridge.fc_sil.vehicle_server import MavlinkOptions
+    from silbridge.mavlink.endpoints import DEFAULT_GCS_URLS, parse_endpoint
+    urls = [] if opts.no_default_gcs else list(DEFAULT_GCS_URLS)
+    urls += [u for u in opts.gcs_urls if u not in urls]
+    return MavlinkOptions(endpoints=[parse_endpoint(u) for u in urls],
+                          param_file=opts.param_file, mission_file=opts.mission_file,
+                          tlog=opts.tlog)
+
+
+def mavlink_cli_args(opts: FlightOptions) -> list[str]:
+    """The same MAVLink options for a `silbridge fc` subprocess."""
+    if not opts.mavlink:
+        return []
+    args = ["--mavlink"]
+    for url in opts.gcs_urls:
+        args += ["--gcs", url]
+    if opts.no_default_gcs:
+        args.append("--no-default-gcs")
+    if opts.param_file:
+        args += ["--params", opts.param_file]
+    if opts.mission_file:
+        args += ["--mission", opts.mission_file]
+    if opts.tlog:
+        args += ["--tlog", opts.tlog]
+    return args
+
+
+def close_fc_loop(loop) -> None:
+    """Stop the MAVLink server of a make_fc_loop(..., mavlink=...) loop (no-op otherwise)."""
+    close = getattr(loop.supervisor, "server", None)
+    if close is not None:
+        from silbridge.fc_sil.vehicle_server import vehicle_close
+        vehicle_close(loop.supervisor)
+
+
+def run_metadata(opts: FlightOptions, sc, sim, cfg, core) -> dict:
+    """What a log records at start: config, scenario, the full parameter set."""
+    return {
+        "config": {
+            "imu_hz": sim.imu_hz, "pwm_hz": cfg.pwm_hz, "physics_hz": _NS / sim.dt_ns,
+            "baro_hz": sc.baro_hz, "mag_hz": sc.mag_hz, "gnss_hz": sc.gnss_hz,
+            "duration_s": cfg.duration_s, "seed": sc.seed, "transport": opts.transport,
+            "processes": opts.processes,
+            "mode": "lockstep" if opts.lockstep else f"realtime x{opts.speed:g}",
+            "features_off": list(opts.features_off),
+        },
+        "scenario": sc.to_dict(),
+        "params": core.params() if core is not None else {},
+        "software": {"silbridge": _version()},
+    }
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("silbridge")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def fly_one_process(opts: FlightOptions, out=print) -> dict:
+    """Bridge and FC interleaved in this process, through the same ring API."""
+    sc, sim = make_simulator(opts)
+    cfg = bridge_config(opts, sc)
+    name = opts.instance or default_instance()
+    sink = None
+    with bridge_segment(opts.transport, name, sim, hil_addr=opts.hil_addr, default_port=0) as seg:
+        prepare_segment(seg, sim, cfg)
+        fc_addr = None if opts.transport == "shm" else bridge_address(seg)
+        with fc_segment(opts.transport, name, hil_addr=fc_addr, wait_config=False) as fc_seg:
+            fc = make_fc_loop(fc_seg, params=opts.params, features_off=opts.features_off,
+                              mavlink=mavlink_options(opts), out=out)
+            guard_fc(fc)
+            if opts.log_path or opts.live is not None:
+                from silbridge.tools.loop.run_log import open_run_sink
+                # The FC's C core logs the PWM it computes (the same records the
+                # bridge receives in lockstep): one memcpy instead of a Python call.
+                sink = open_run_sink(opts.log_path, run_metadata(opts, sc, sim, cfg, fc.core),
+                                     viz_hz=opts.viz_hz, live=opts.live, out=out)
+                fc.sink = sink
+                fc.supervisor.sink = sink
+            res = None
+            ended = {}
+            try:
+                with STOP.polling(), STOP.emergency(segment_unlinker(seg)):
+                    res = run_bridge(sim, seg, cfg, sink=sink, out=_tee(out, sink, sim),
+                                     fc_poll=in_process_poll(fc, fc_seg, seg, sim, opts.lockstep),
+                                     stop=STOP)
+            except BaseException as exc:
+                ended = {"aborted": f"{type(exc).__name__}: {exc}"}
+                raise
+            finally:
+                close_fc_loop(fc)
+                if sink is not None:
+                    sink.close(**(_end_fields(res) or ended))
+            fc_summary = fc.summary()
+    summary = summarise(opts, sc, sim, res, fc_summary)
+    if sink is not None:
+        summary["log"] = opts.log_path
+    return summary
+
+
+def segment_unlinker(seg):
+    """The emergency clean-up of a segment this process owns (a second Ctrl-C)."""
+    unlink = getattr(seg, "unlink", None)
+    return unlink if unlink is not None and getattr(seg, "is_owner", False) else (lambda: None)
+
+
+def _end_fields(res) -> dict:
+    """What the log's closing summary says about how the run ended."""
+    if res is None:
+        return {"interrupted": STOP.name} if STOP.requested else {}
+    return {"interrupted": res.interrupted} if res.interrupted else {}
+
+
+def _tee(out, sink, sim):
+    """Print a progress line and, with a log, record it as a check event."""
+    if sink is None:
+        return out
+
+    def both(line: str) -> None:
+        out(line)
+        if line.startswith("check "):
+            sink.event(sim.sim_ns, "check", line[6:].strip())
+    return both
+
+
+def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
+    sc, sim = make_simulator(opts)
+    cfg = bridge_config(opts, sc)
+    name = opts.instance or default_instance()
+    with bridge_segment(opts.transport, name, sim, hil_addr=opts.hil_addr, default_port=0) as seg:
+        prepare_segment(seg, sim, cfg)
+        cmd = [sys.executable, "-m", "silbridge.tools", "fc", "--instance", name, "--json"]
+        cmd += fc_cli_args(opts.transport, seg)
+        for pname, value in (opts.params or {}).items():
+            cmd += ["--param", f"{pname}={value}"]
+        for feature in opts.features_off:
+            cmd += ["--feature-off", feature]
+        cmd += mavlink_cli_args(opts)
+        meta_path = None
+        if opts.log_path or opts.live is not None:
+            # The FC process writes the log (it sees every record and its own PWM);
+            # it adds the parameter set to the metadata the bridge side knows.
+            meta_path = f"{opts.log_path}.meta.json" if opts.log_path else \
+                os.path.join(tempfile.gettempdir(), f"{name}.meta.json")
+            meta = run_metadata(opts, sc, sim, cfg, None)
+            with open(meta_path, "w") as fh:
+                json.dump(meta, fh)
+            cmd += ["--log-meta", meta_path] + (["--log", opts.log_path] if opts.log_path else [])
+            if opts.viz_hz is not None:
+                cmd += ["--viz-hz", str(opts.viz_hz)]
+            if opts.live is not None:
+                cmd += ["--live", opts.live]
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
+        try:
+            with STOP.polling(), STOP.emergency(segment_unlinker(seg)), \
+                    STOP.emergency(proc.terminate):
+                res = run_bridge(sim, seg, cfg, peer_check=lambda: proc.poll() is None,
+                                 sink=sink, out=out, stop=STOP)
+                # The FC finishes and indexes the log before it prints its summary.
+                stdout, _ = proc.communicate(timeout=30)
+        finally:
+            stop_child(proc)
+    fc_summary = last_json_line(stdout)
+    summary = summarise(opts, sc, sim, res, fc_summary)
+    if meta_path:
+        os.unlink(meta_path)
+    if opts.log_path:
+        summary["log"] = opts.log_path
+    return summary
+
+
+def stop_child(proc, timeout_s: float = 10.0) -> None:
+    """Stop a child still running: SIGTERM first (it closes its log), SIGKILL if it hangs."""
+    if proc.poll() is not None:
+        return
+    proc.terminate()
+    try:
+        proc.wait(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+def last_json_line(text: str) -> dict:
+    """The last JSON object a `silbridge ... --json` child printed ({} if none)."""
+    for line in reversed((text or "").strip().splitlines()):
+        line = line.strip()
+        if line.startswith("{"):
+            return json.loads(line)
+    return {}
+
+
+def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
+    """The `fly --json` object (keys fixed by the closed-loop issue) plus context."""
+    scale_s = res.sim_s if opts.lockstep else res.wall_s * opts.speed
+    scale_s = max(scale_s, 1e-9)
+    pub = res.published
+    rates = {k: pub.get(k, 0) / scale_s for k in ("imu", "baro", "mag", "gnss")}
+    rates["pwm"] = res.pwm_hz
+    overwritten = sum(r["overwritten"] for r in res.ring.values())
+    rejected = sum(r["rejected"] for r in res.ring.values())
+    return {
+        "sim_s": res.sim_s,
+        "wall_s": res.wall_s,
+        "realtime_factor": res.sim_s / max(res.wall_s, 1e-9),
+        # CPU seconds of the bridge's loop thread (with --processes 1 the FC's too): the
+        # speed figure that other processes on the machine do not inflate.
+        "loop_cpu_s": res.cpu_s,
+        "rates_hz": rates,
+        "overwritten": overwritten,
+        "rejected": rejected,
+        "latency_us": fc_summary.get("latency_us", {"p50": None, "p99": None}),
+        "jitter_us": fc_summary.get("jitter_us", {"p50": None, "p99": None}),
+        "e2e_us": fc_summary.get("e2e_us", {"p50": None, "p99": None}),
+        "attitude_rms_deg": res.attitude_rms_deg,
+        "altitude_rms_m": res.altitude_rms_m,
+        "trace_hash": res.trace_hash,
+        "crashed": res.crashed,
+        "scenario": sc.name,
+        "seed": sc.seed,
+        "imu_hz": sim.imu_hz,
+        "mode": "lockstep" if opts.lockstep else f"realtime x{opts.speed:g}",
+        "processes": opts.processes,
+        "checks": [{"name": c.name, "ok": c.ok, "detail": c.detail} for c in res.checks],
+        "late_steps": res.late_steps,
+        # The signal that ended the run early ("SIGINT"/"SIGTERM"), else None.
+        "interrupted": res.interrupted,
+        **({"mavlink": fc_summary["mavlink"]} if "mavlink" in fc_summary else {}),
+    }
+
+
+def print_summary(s: dict, out=print) -> None:
+    lat, jit = s["latency_us"], s["jitter_us"]
+    r = s["rates_hz"]
+
+    def f(v, fmt="{:.2f}"):
+        return "n/a" if v is None else fmt.format(v)
+
+    out(f"scenario {s['scenario']} seed {s['seed']}  {s['mode']}, {s['processes']} process(es)")
+    out(f"sim {s['sim_s']:.2f} s in {s['wall_s']:.2f} s wall  ({s['realtime_factor']:.1f}x real time)")
+    out(f"rates  IMU {r['imu']:.1f}  baro {r['baro']:.1f}  mag {r['mag']:.1f}  "
+        f"GNSS {r['gnss']:.1f}  PWM {r['pwm']:.1f} Hz")
+    out(f"ring   overwritten {s['overwritten']}  rejected {s['rejected']}")
+    out(f"sensor->FC latency p50 {f(lat['p50'])} us  p99 {f(lat['p99'])} us;  "
+        f"loop jitter p50 {f(jit['p50'])} us  p99 {f(jit['p99'])} us")
+    out(f"attitude RMS {f(s['attitude_rms_deg'], '{:.3f}')} deg  altitude RMS "
+        f"{f(s['altitude_rms_m'], '{:.3f}')} m  crashed {s['crashed']}")
+    out(f"trace hash {s['trace_hash']}")
+    if s.get("interrupted"):
+        out(f"INTERRUPTED by {s['interrupted']} at {s['sim_s']:.2f} s of sim time: a partial run")

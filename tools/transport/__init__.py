@@ -1,0 +1,1 @@
+"""The transport comparison (Table 2): shared memory against MAVLink HIL."""

@@ -1,0 +1,1 @@
+"""Tuning and diagnosis: system identification, margins, step responses, autotune."""
