@@ -108,3 +108,22 @@ def test_log_without_closing_summary_is_named(tmp_path, run):
     assert report.notes == ["log unfinished: the writer never finished (no closing summary); "
                             "metrics cover what it holds"]
     assert report.unfinished["channels"]["/imu"]["last_s"] == pytest.approx(4.0)
+
+
+def test_run_interrupted_before_its_first_sample_passes(tmp_path, run):
+    """Ctrl-C can reach a campaign's second worker while it still starts up: its log holds
+    the start metadata and no rows. Nothing was owed, so nothing is a problem; the notes say
+    why it is empty. A run stopped later still owes every stream up to the stop."""
+    path = tmp_path / "empty.mcap"
+    LogWriter(path, metadata=run.metadata).close(interrupted="SIGINT")
+    report = inspect_log(read_log(path))
+    assert report.problems == []
+    assert "/imu: no rows (the run stopped before its first sample)" in report.notes
+    assert report.notes[0] == "run interrupted by SIGINT at 0.000 s of sim time (planned 4 s)"
+
+    late = tmp_path / "late.mcap"
+    with LogWriter(late, metadata=run.metadata) as w:
+        w.write("/imu", run.channels["/imu"][:2000])
+    log = read_log(late)
+    log.end["interrupted"] = "SIGINT"
+    assert "/baro: no rows, but the run config sets 100 Hz" in inspect_log(log).problems
