@@ -4,9 +4,10 @@
 
 One MCAP channel per stream (/imu, /baro, /mag, /gnss, /gt_att, /gt_nav, /pwm,
 /setpoint, /fc/status, /timing, ...). Rows of a channel are numpy structured
-arrays; the writer copies their bytes into a per-channel queue and, every
-`batch_rows` rows, turns a batch into ONE ros2msg/CDR message whose rows are
-those bytes unchanged (tools/logs/log_schema.py). So logging costs one small copy
+arrays; the writer copies their bytes into a per-channel queue
+(tools/logs/log_stream.py) and, every `batch_rows` rows, turns a batch into
+ONE ros2msg/CDR message whose rows are those bytes unchanged
+(tools/logs/log_schema.py). So logging costs one small copy
 per call, a few hundred ns, and a few microseconds per batch of 1024 rows;
 `write_cycle` logs a whole loop cycle in one call. tools/logs/log_bench.py
 measures the cost per physics step, on a replay and in the real loop.
@@ -19,8 +20,9 @@ Besides the streams a log holds:
   "physics_hz", "duration_s", "seed", "transport", "processes", "mode", ...},
   "scenario": {...}, "params": {name: value}, "software": {...}}.
   The same JSON is also the one message on "/run/metadata" so Foxglove shows it.
-- "/events": one JSON message per event, shaped as a foxglove.Log message
-  (timestamp, level, name = kind, message = text) plus sim_ns and fields, so
+- "/events" (tools/logs/log_events.py): one JSON message per event, shaped as
+  a foxglove.Log message (timestamp, level, name = kind, message = text) plus
+  sim_ns and fields, so
   Foxglove's Log panel lists mode changes, parameter changes, disturbances
   and check results.
 - MCAP metadata "silbridge.end", written by `close()`: rows per channel, last
@@ -53,103 +55,18 @@ from time import monotonic_ns
 import numpy as np
 
 from silbridge.shm.records import DTYPES, RECORD_DTYPE, RECORD_SIZE, Kind
-from silbridge.tools.logs.log_format import (CHANNEL_DTYPE_KEY, EVENTS_CHANNEL, KIND_CHANNELS,
-                                        LOG_FORMAT_VERSION, META_END, META_RUN, RUN_CHANNEL,
-                                        STATUS_CHANNEL, TIMING_CHANNEL, TIMING_DTYPE,
-                                        LogError, to_json)
+from silbridge.tools.logs.log_events import EventChannel
+from silbridge.tools.logs.log_format import (EVENTS_CHANNEL, KIND_CHANNELS, LOG_FORMAT_VERSION,
+                                        META_END, META_RUN, RUN_CHANNEL, STATUS_CHANNEL,
+                                        TIMING_CHANNEL, TIMING_DTYPE, LogError, to_json)
 from silbridge.tools.logs.log_reader import RunLog, read_log
-from silbridge.tools.logs.log_schema import (BatchCodec, dtype_to_json, ros2msg_schema, row_layout,
-                                        row_struct)
+from silbridge.tools.logs.log_stream import ChannelStream
 from silbridge.tools.logs.mcap_writer import LibraryMcap, McapFile, NullMcap
 from silbridge.tools.logs.viz_log import VIZ_HZ_DEFAULT
 
 # The public face of the log package: one import for writers and readers.
 __all__ = ["LogWriter", "LogError", "RunLog", "read_log", "TIMING_DTYPE", "KIND_CHANNELS",
            "STATUS_CHANNEL", "TIMING_CHANNEL", "to_json"]
-
-# foxglove.Log, with our own fields added; Foxglove's Log panel reads the first five.
-_EVENT_SCHEMA = {
-    "title": "foxglove.Log",
-    "type": "object",
-    "properties": {
-        "timestamp": {"type": "object", "properties": {
-            "sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
-        "level": {"type": "integer", "description": "2 = INFO"},
-        "name": {"type": "string", "description": "event kind: mode, param, disturbance, check"},
-        "message": {"type": "string"},
-        "file": {"type": "string"},
-        "line": {"type": "integer"},
-        "sim_ns": {"type": "integer"},
-        "fields": {"type": "object"},
-    },
-}
-
-
-class _Stream:
-    """One channel being written.
-
-    Rows arrive as raw bytes appended to `pending` (arr.tobytes(): the cheapest
-    safe copy of a small numpy array); every `capacity` rows, one batch of
-    those bytes becomes one MCAP message with no per-row or per-field work
-    (tools/logs/log_schema.py: the rows' bytes are their CDR encoding). A dtype
-    that CDR cannot lay out byte for byte is re-laid out per batch.
-    """
-
-    __slots__ = ("name", "channel_id", "in_dtype", "row_dtype", "itemsize", "pending",
-                 "batch_bytes", "capacity", "codec", "rows", "last_sim_ns", "packer", "_mcap",
-                 "tap")
-
-    def __init__(self, mcap, name: str, in_dtype: np.dtype, capacity: int):
-        row_dtype = row_layout(in_dtype)
-        if "sim_ns" not in row_dtype.names or row_dtype["sim_ns"] != np.dtype("<i8"):
-            raise ValueError(f"rows of {name} need an int64 'sim_ns' field (message time)")
-        self.codec = BatchCodec(row_dtype)
-        stem = "".join(p.capitalize() for p in name.strip("/").replace("/", "_").split("_"))
-        schema = ros2msg_schema(row_dtype, stem, f"silbridge batch of {name} rows")
-        schema_id = mcap.register_schema(f"silbridge_msgs/msg/{stem}Batch", "ros2msg", schema)
-        self.channel_id = mcap.register_channel(
-            name, "cdr", schema_id, {CHANNEL_DTYPE_KEY: dtype_to_json(row_dtype)})
-        self.name = name
-        self.in_dtype = in_dtype
-        self.row_dtype = row_dtype
-        self.itemsize = in_dtype.itemsize
-        self.pending = bytearray()
-        self.capacity = capacity
-        self.batch_bytes = capacity * in_dtype.itemsize
-        self.rows = 0
-        self.last_sim_ns = 0
-        self.packer = row_struct(in_dtype)
-        self._mcap = mcap
-        self.tap = None     # tap(rows): each emitted batch, for the viewable channels
-
-    def drain(self, final: bool = False) -> None:
-        """Emit every full batch in `pending` (and, if final, the partial rest)."""
-        pending, step = self.pending, self.batch_bytes
-        while len(pending) >= step or (final and pending):
-            take = min(step, len(pending))
-            # One copy out; the temporary view is gone before `pending` shrinks.
-            raw = bytes(memoryview(pending)[:take])
-            del pending[:take]
-            self._emit(raw)
-
-    def _emit(self, raw: bytes) -> None:
-        rows = np.frombuffer(raw, dtype=self.in_dtype)
-        if self.row_dtype is not self.in_dtype:
-            aligned = np.zeros(len(rows), dtype=self.row_dtype)
-            for name in self.in_dtype.names:
-                aligned[name] = rows[name]
-            rows, raw = aligned, aligned.tobytes()
-        sim_ns = rows["sim_ns"]
-        first_ns = max(int(sim_ns[0]), 0)
-        self.last_sim_ns = max(self.last_sim_ns, int(sim_ns[-1]))
-        self._mcap.add_message(self.channel_id, first_ns, first_ns, self.rows & 0xFFFFFFFF,
-                               self.codec.encode(raw, sim_ns))
-        self.rows += len(rows)
-        if self.tap is not None:
-            self.tap(rows)
-
-    def buffered_rows(self) -> int:
-        return len(self.pending) // self.itemsize
 
 
 class LogWriter:
@@ -204,7 +121,7 @@ class LogWriter:
             raise LogError(f"cannot create log {self.path}: {exc.strerror}; "
                            "choose a writable path") from exc
         self.batch_rows = batch_rows
-        self._streams: dict[str, _Stream] = {}
+        self._streams: dict[str, ChannelStream] = {}
         self._stage = bytearray()
         # Staged records are split by kind every 4 batches' worth: the split costs a
         # few numpy calls per kind, and a killed run loses at most this much.
@@ -215,8 +132,7 @@ class LogWriter:
         self._capture_rebind = None  # capture by a C producer (capture_targets)
         self._capture_ticks = 0
         self._tm_pack = self._tm_pending = self._tm_limit = None
-        self._events = 0
-        self._event_channel: int | None = None
+        self._events = EventChannel(self._mcap)
         self._closed = False
         self._calls = 0
         self._flush_wall_ns = monotonic_ns() + self.FLUSH_NS
@@ -238,12 +154,13 @@ class LogWriter:
         self._flush_partial = live is not None
 
     # -- rows -------------------------------------------------------------
-    def _open(self, channel: str, dtype: np.dtype) -> _Stream:
+    def _open(self, channel: str, dtype: np.dtype) -> ChannelStream:
         if self._closed:
             raise ValueError("write after close()")
         if channel in (EVENTS_CHANNEL, RUN_CHANNEL):
             raise ValueError(f"{channel} is reserved; use event()")
-        stream = self._streams[channel] = _Stream(self._mcap, channel, dtype, self.batch_rows)
+        stream = ChannelStream(self._mcap, channel, dtype, self.batch_rows)
+        self._streams[channel] = stream
         if self._viz is not None:
             stream.tap = self._viz.tap(channel, dtype)
         return stream
@@ -484,17 +401,7 @@ class LogWriter:
         """Log one event now (mode, param, disturbance, check, ...); fields: JSON values."""
         if self._closed:
             raise ValueError("event() after close()")
-        if self._event_channel is None:
-            schema = self._mcap.register_schema("foxglove.Log", "jsonschema",
-                                                json.dumps(_EVENT_SCHEMA).encode())
-            self._event_channel = self._mcap.register_channel(EVENTS_CHANNEL, "json", schema)
-        sim_ns = int(sim_ns)
-        body = {"timestamp": {"sec": sim_ns // 1_000_000_000, "nsec": sim_ns % 1_000_000_000},
-                "level": 2, "name": str(kind), "message": str(text), "file": "", "line": 0,
-                "sim_ns": sim_ns, "fields": fields}
-        self._mcap.add_message(self._event_channel, max(sim_ns, 0), max(sim_ns, 0),
-                               self._events, [to_json(body).encode()])
-        self._events += 1
+        self._events.write(sim_ns, kind, text, fields)
 
     # -- end --------------------------------------------------------------
     @property
@@ -522,7 +429,7 @@ class LogWriter:
                 self._viz.close()
                 summary = {"viz_cpu_s": self._viz.cpu_s, **summary}
             end = {"rows": {n: s.rows for n, s in self._streams.items()},
-                   "events": self._events,
+                   "events": self._events.count,
                    "unknown_records": {str(k): n for k, n in self._unknown.items()},
                    "end_sim_ns": max((s.last_sim_ns for s in self._streams.values()),
                                      default=0),

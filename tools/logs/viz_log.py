@@ -3,8 +3,8 @@
 The analysis channels (/imu, /gt_att, /fc/status, ...) carry batches of up to
 1,024 rows per message: fast to write and read, useless to Foxglove's Plot
 panel, which plots one value per message. Every time the writer emits a
-batch (tools/logs/mcap_log.py `_Stream`), the batch's rows come here and become
-one message per sample, at most `viz_hz` per second (every row of slower
+batch (tools/logs/log_stream.py `ChannelStream`), the batch's rows come here and
+become one message per sample, at most `viz_hz` per second (every row of slower
 channels), so the values are the batch's values by construction:
 
   /viz/attitude  ground truth: roll_deg, pitch_deg, yaw_deg, body rates p/q/r_deg_s
