@@ -50,6 +50,7 @@ if core_src:
         )
     )
 
+# stepmodule.c (the Python type), step_run.c (the step), step_config.c, step_maths.c
 step_src = sources("bridge/src/*.c")
 if step_src:
     extensions.append(

@@ -1,5 +1,5 @@
 /*
- * step_config.c - the Kernel methods used between steps (stepmodule.c has the
+ * step_config.c - the Kernel methods used between steps (step_run.c has the
  * step itself): the IMU noise block and injected gyro bias, the baro and
  * magnetometer configuration and noise, the disturbance forces, counters and
  * the attributes Python reads or sets (next_slow_ns, pos).

@@ -1,7 +1,8 @@
 /*
  * step_kernel.h - the Kernel object of silbridge.bridge._step, shared by
- * stepmodule.c (construction, the step, the module) and step_config.c (the
- * methods that configure it between steps: noise blocks, sensors, forces).
+ * stepmodule.c (the Python type: construction, arguments, the module),
+ * step_run.c (the step itself) and step_config.c (the methods that configure
+ * it between steps: noise blocks, sensors, forces).
  */
 #ifndef SB_STEP_KERNEL_H
 #define SB_STEP_KERNEL_H
@@ -118,6 +119,10 @@ void sb_step_release(Py_buffer *v);
 int sb_step_take_callables(PyObject *seq, PyObject **out, Py_ssize_t n, const char *what);
 int sb_step_get_f64(PyObject *obj, Py_buffer *view, Py_ssize_t min_items, int writable,
                     const char *what);
+
+/* step_run.c: one physics step, its records written from slot `first`; returns the
+ * F_* flags or'ed with the number of records written, or -1 with an exception set. */
+long sb_step_run(Kernel *self, PyObject *pwm, Py_ssize_t first);
 
 /* step_config.c: configuration methods and attributes of the Kernel type */
 void sb_step_clear_forces(Kernel *self);
