@@ -34,38 +34,6 @@ websockets = pytest.importorskip("websockets")
 
 SUBPROTOCOLS = ["foxglove.websocket.v1", "foxglove.sdk.v1"]
 
-# A command change and a push during the few seconds the client listens.
-SCENARIO = """
-name = "live"
-description = "pitch step at 2 s, push north from 2.5 to 3.5 s (on the ground)"
-seed = 9
-duration_s = 6.0
-takeoff_alt_m = 10.0
-
-[windows]
-warmup_s = 1.0
-transient_end_s = 2.0
-
-[[setpoint]]
-type = "tilt"
-axis = "pitch"
-shape = "step"
-amplitude_deg = 10.0
-hold_s = 1.0
-start_s = 2.0
-repeat = 1
-period_s = 10.0
-
-[[disturbance]]
-type = "force"
-frame = "ned"
-axis = "x"
-amplitude_g = 0.2
-start_s = 2.5
-stop_s = 3.5
-"""
-
-
 def _decoder(channel: dict):
     data = channel["schema"].encode()
     if channel["schemaEncoding"] == "protobuf":
@@ -140,9 +108,11 @@ def _fly_and_listen(scenario) -> tuple[int, str, tuple | None]:
 
 
 @pytest.mark.slow
-def test_fly_live_serves_every_viewable_channel(tmp_path):
-    scenario = tmp_path / "live.toml"
-    scenario.write_text(SCENARIO)
+def test_fly_live_serves_every_viewable_channel(tmp_path, pitch_push_scenario):
+    # A command change and a push during the few seconds the client listens.
+    scenario = pitch_push_scenario(
+        tmp_path, "live", "pitch step at 2 s, push north from 2.5 to 3.5 s (on the ground)",
+        seed=9, duration_s=6.0, step_s=2.0)
     # A real-time start on a loaded 2-core machine can miss the bridge's start-up rate
     # check (the machine, not the live view, was slow for that second): retried twice.
     for _attempt in range(3):

@@ -41,45 +41,16 @@ def decoded(path, topics=None) -> dict[str, list]:
     return out
 
 
-# Take-off (the scripted one arms at 5 s), a pitch step and a push north, in 12 s of sim time.
-SCENARIO = """
-name = "viz"
-description = "take-off at 5 s, a 10 deg pitch step at 10 s, a 0.2 g push north from 10.5 to 11.5 s"
-seed = 7
-duration_s = 12.0
-takeoff_alt_m = 10.0
-
-[windows]
-warmup_s = 1.0
-transient_end_s = 2.0
-
-[[setpoint]]
-type = "tilt"
-axis = "pitch"
-shape = "step"
-amplitude_deg = 10.0
-hold_s = 1.0
-start_s = 10.0
-repeat = 1
-period_s = 10.0
-
-[[disturbance]]
-type = "force"
-frame = "ned"
-axis = "x"
-amplitude_g = 0.2
-start_s = 10.5
-stop_s = 11.5
-"""
-
-
 @pytest.fixture(scope="module")
-def flight(tmp_path_factory):
+def flight(tmp_path_factory, pitch_push_scenario):
     from silbridge.tools.loop.flight import FlightOptions, fly_one_process
     tmp = tmp_path_factory.mktemp("viz")
-    (tmp / "viz.toml").write_text(SCENARIO)
+    # Take-off (the scripted one arms at 5 s), a pitch step and a push north, in 12 s.
+    scenario = pitch_push_scenario(
+        tmp, "viz", "take-off at 5 s, a 10 deg pitch step at 10 s, "
+        "a 0.2 g push north from 10.5 to 11.5 s", seed=7, duration_s=12.0, step_s=10.0)
     path = tmp / "flight.mcap"
-    s = fly_one_process(FlightOptions(scenario=str(tmp / "viz.toml"), processes=1,
+    s = fly_one_process(FlightOptions(scenario=str(scenario), processes=1,
                                       log_path=str(path)), out=lambda line: None)
     assert not s["crashed"]
     return path, read_log(path), decoded(path, list(CHANNELS))
