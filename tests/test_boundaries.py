@@ -4,7 +4,9 @@ The two programs meet only through `shm/` and `mavlink/`, so `bridge/` and `fc_s
 import each other; `shm/` imports no other part of the project; `mavlink/` knows records and
 messages, not physics or controllers; nothing below the command line imports `tools/` (the
 benchmark toolkit and the command line); and the portable C core includes only its own headers
-and the C standard library, so it compiles on a flight controller as it is.
+and the C standard library, so it compiles on a flight controller as it is. Inside the core,
+estimation and control meet only in the vehicle state (`fc_vehicle_state.h`): the control law
+reads no estimator and no ground truth directly.
 """
 
 from __future__ import annotations
@@ -74,6 +76,28 @@ def test_c_core_includes_only_its_own_headers_and_the_standard_library():
             if not ok:
                 bad.append(f"{path.name}: #include {kind}{header}")
     assert not bad, "the portable core reaches outside itself:\n" + "\n".join(bad)
+
+
+# The control law's files, and what they must not reach: the estimators, the front end,
+# ground truth and the blend (all of it arrives through fc_vehicle_state_t).
+CONTROL_FILES = ("fc_control.c", "fc_control.h", "fc_spool.c", "fc_spool.h")
+ESTIMATION = re.compile(r"->\s*(ahrs|ins|alt_est|source|gnss_aid|gnss)\b|\b(fc_mahony|fc_ins|fc_alt_est|"
+                        r"fc_state_source|fc_blend|fc_gnss_aid)_\w+")
+
+
+def _code(text: str) -> str:
+    """C text without its comments."""
+    return re.sub(r"/\*.*?\*/|//[^\n]*", "", text, flags=re.S)
+
+
+def test_c_control_law_reads_the_vehicle_state_only():
+    core = ROOT / "fc_sil" / "core"
+    bad = []
+    for name in CONTROL_FILES:
+        for m in ESTIMATION.finditer(_code((core / name).read_text())):
+            bad.append(f"{name}: {m.group(0)}")
+    assert not bad, "the control law reads estimation directly:\n" + "\n".join(bad)
+    assert ESTIMATION.search("x = c->ahrs.q_wxyz[0];")   # the scan is not vacuous
 
 
 def test_the_checker_sees_a_crossing(tmp_path):

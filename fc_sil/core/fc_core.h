@@ -4,26 +4,34 @@
  * extension here; a real flight controller's scheduler later).
  *
  *   IMU sample : front-end filters -> Mahony -> vertical prediction; then,
- *                decimated to at most SB_LOOP_HZ: EST/GT blend -> input
- *                shaping of the attitude target -> attitude P + target-rate feed-forward
- *                -> rate PI+D (x3) -> hover trim -> mixer inputs cr, cp, cy.
- *   PWM period : spool logic (arming, take-off, lift-off and landing
- *                detection) -> altitude controller -> mixer, clamp, slew ->
- *                PWM, and a status snapshot.
+ *                decimated to at most SB_LOOP_HZ: the state source publishes
+ *                attitude and rates into the vehicle state (the estimate,
+ *                blended with ground truth when SB_ATT_SRC asks) -> the rate-loop
+ *                step of the control law (input shaping, attitude P + target-rate
+ *                feed-forward, rate PI+D x3, hover trim -> mixer inputs cr, cp, cy).
+ *   PWM period : spool logic (arming, take-off) -> the state source publishes
+ *                the vertical channel -> lift-off and landing detection ->
+ *                altitude controller -> mixer, clamp, slew -> PWM, and a status
+ *                snapshot.
  *   BARO / MAG / GT / GNSS: routed to the vertical estimator, the heading
- *                corrector, the blend inputs and a store; while armed, each
- *                GNSS fix is also compared with the IMU history over its
- *                delayed interval (fc_gnss_aid.h) and the result corrects the
+ *                corrector, the state source's truth store and a store; while
+ *                armed, each GNSS fix is also compared with the IMU history over
+ *                its delayed interval (fc_gnss_aid.h) and the result corrects the
  *                estimator's tilt (SB_AHRS_GPS).
+ *
+ * Estimation and control meet only in the vehicle state (fc_vehicle_state.h):
+ * estimators and ground truth fill it (fc_state_source.h), the controllers
+ * (fc_control.h, fc_spool.h) read it. Parameters reach the blocks through
+ * fc_config_map.h.
  *
  * PWM ticks lie on a grid of 1/SB_PWM_HZ in simulation time. fc_core_pwm_due
  * tells the host when a tick is due: every tick whose time is <= the latest
  * accepted IMU sample. The core keeps no clock of its own and makes no OS call.
  *
- * Inputs (targets) are set between steps with the fc_core_set_* functions;
- * they validate (non-finite refused) and take effect on the next step.
- * No heap, no globals: everything lives in fc_core_t (about 4 kB, 1.5 kB of
- * it the GNSS-aiding history).
+ * Inputs (targets) are set between steps with the fc_core_set_* functions
+ * (fc_core_inputs.c); they validate (non-finite refused) and take effect on
+ * the next step. No heap, no globals: everything lives in fc_core_t (about
+ * 4 kB, 1.5 kB of it the GNSS-aiding history).
  */
 #ifndef FC_CORE_H
 #define FC_CORE_H
@@ -33,18 +41,21 @@
 
 #include "fc_alt_ctrl.h"
 #include "fc_alt_est.h"
-#include "fc_attitude.h"
-#include "fc_blend.h"
+#include "fc_config_map.h"
 #include "fc_gnss_aid.h"
+#include "fc_inputs.h"
 #include "fc_ins.h"
 #include "fc_mahony.h"
 #include "fc_mixer.h"
 #include "fc_params.h"
 #include "fc_rate_pid.h"
 #include "fc_shaper.h"
+#include "fc_spool.h"
+#include "fc_state_source.h"
 #include "fc_status.h"
 #include "fc_sysid.h"
 #include "fc_trim.h"
+#include "fc_vehicle_state.h"
 
 /* One snapshot per PWM tick: what logs, PID_TUNING and tests read. The
  * Python STATUS_DTYPE mirrors this layout field for field (checked by a test). */
@@ -84,19 +95,6 @@ typedef struct fc_core_status {
     uint8_t reserved[5];             /* explicit padding to a multiple of 8 */
 } fc_core_status_t;
 
-typedef struct fc_core_inputs {
-    uint8_t armed;
-    uint8_t yaw_hold;        /* 1: yaw angle target; 0: yaw rate target */
-    uint8_t alt_mode;        /* fc_alt_mode_t */
-    float roll_target_rad;
-    float pitch_target_rad;
-    float yaw_target_rad;
-    float yaw_rate_target_rad_s;
-    float alt_target_m;      /* above home, up */
-    float climb_target_m_s;  /* up */
-    float throttle;          /* 0..1, direct-throttle mode */
-} fc_core_inputs_t;
-
 typedef struct fc_gnss_store {
     int64_t sim_ns;
     int32_t lat_e7, lon_e7, alt_mm;
@@ -110,67 +108,46 @@ typedef struct fc_core {
     fc_params_t params;
     fc_core_inputs_t in;
 
-    /* block configurations derived from params (fc_core_apply_params) */
-    fc_ins_config_t ins_cfg;
-    fc_mahony_config_t ahrs_cfg;        /* in flight (armed) */
-    fc_mahony_config_t ahrs_ground_cfg; /* disarmed: fast alignment and bias learning */
-    fc_attitude_config_t att_cfg;
-    fc_shaper_config_t shaper_cfg;
-    fc_rate_pid_config_t pid_cfg[3];
-    fc_trim_config_t trim_cfg;
-    fc_mixer_config_t mix_cfg;
-    fc_alt_ctrl_config_t alt_cfg;
-    fc_sysid_config_t sysid_cfg;
-    float angle_max_rad;
-    float loop_period_s;
-    int64_t pwm_period_ns;
+    fc_core_config_t cfg;     /* block configurations derived from params (fc_config_map.h) */
+    int64_t pwm_period_ns;    /* PWM tick period (SB_PWM_HZ) [ns] */
 
-    /* blocks */
+    /* estimation */
     fc_ins_t ins;
     fc_mahony_t ahrs;
-    fc_shaper_t shaper;      /* shaped attitude target (input shaping) */
-    fc_rate_pid_t pid[3];
-    fc_trim_t trim;
-    fc_blend_t blend;
-    fc_mixer_t mixer;
+    bool ahrs_ground;         /* ahrs runs the ground configuration */
     fc_alt_est_t alt_est;
-    fc_alt_ctrl_t alt_ctrl;
     fc_gnss_aid_t gnss_aid;   /* IMU history for the GNSS-aided tilt correction */
     uint32_t gnss_aid_count;  /* GNSS fixes that corrected the tilt so far */
-    fc_sysid_t sysid;         /* SYSTEMID sweep (SID_*) */
-    float pid_out_us[3];      /* rate-loop outputs before a mixer-input sweep [us] */
+    fc_gnss_store_t gnss;
+    fc_state_source_t source; /* estimate + ground truth -> state */
+    fc_vehicle_state_t state; /* what the controllers read */
 
-    bool ahrs_ground;     /* ahrs runs the ground configuration */
+    /* control */
+    fc_shaper_t shaper;       /* shaped attitude target (input shaping) */
+    fc_rate_pid_t pid[3];
+    fc_trim_t trim;
+    fc_mixer_t mixer;
+    fc_alt_ctrl_t alt_ctrl;
+    fc_sysid_t sysid;         /* SYSTEMID sweep (SID_*) */
+    uint8_t spool;            /* fc_spool_t, moved by spool_logic */
+    fc_spool_logic_t spool_logic;
 
     /* time */
     bool have_imu;
     int64_t last_imu_ns;
-    float imu_dt_s;       /* IMU period the front-end coefficients use [s] */
-    float loop_dt_s;      /* rate-loop period the PID filters use [s] */
-    float loop_accum_s;   /* time since the last rate-loop run [s] */
+    float imu_dt_s;           /* IMU period the front-end coefficients use [s] */
+    float loop_accum_s;       /* time since the last rate-loop run [s] */
     int64_t next_pwm_ns;
-
-    /* ground truth (blend inputs) and GNSS store */
-    float gt_q_wxyz[4];
-    int64_t gt_att_ns;
-    bool have_gt_att;
-    float gt_alt_m, gt_climb_m_s;
-    int64_t gt_nav_ns;
-    bool have_gt_nav;
-    fc_gnss_store_t gnss;
 
     /* latest rate-loop results */
     float att_target_rad[3];
     float att_err_frd_rad[3];
     float rate_target_frd_rad_s[3];
-    float rate_frd_rad_s[3];  /* filtered, bias-corrected gyro of the rate loop [rad/s] */
+    float rate_frd_rad_s[3];  /* the body rates the rate loop used [rad/s] */
+    float pid_out_us[3];      /* rate-loop outputs before a mixer-input sweep [us] */
     float trim_us[2];
     float cr_us, cp_us, cy_us;
     float throttle_us;
-    uint8_t airborne;
-    uint8_t spool;
-    uint8_t armed_prev;
-    float landed_s;
 
     uint32_t imu_count, loop_count, pwm_count, rejected_count;
     fc_core_status_t status;

@@ -141,4 +141,14 @@ static inline float fc_ema_alpha(float dt_s, float tau_s)
     return 1.0f - expf(-dt_s / tau_s);
 }
 
+/* Filters sampled at a measured period are recomputed only when the period
+ * moves by more than this fraction (a 1 % error in a cutoff is below what any
+ * tuning resolves, and recomputing every step would cost an exp/tan each). */
+#define FC_RETUNE_TOLERANCE 0.01f
+
+static inline bool fc_retune_needed(float current_s, float measured_s)
+{
+    return fabsf(measured_s - current_s) > FC_RETUNE_TOLERANCE * current_s;
+}
+
 #endif /* FC_MATH_H */

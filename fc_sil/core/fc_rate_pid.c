@@ -14,19 +14,24 @@ static int d_filter_kind(const fc_rate_pid_config_t *cfg)
     return cfg->d_pt2x2 ? FC_FILTER_PT2X2 : FC_FILTER_PT1;
 }
 
+/* Filter coefficients for the period dt_s (filter kinds kept). */
+static void tune_filters(fc_rate_pid_t *pid, float dt_s)
+{
+    pid->dt_s = dt_s;
+    fc_pt1_update_cutoff(&pid->target_lpf, pid->cfg.fltt_hz, dt_s);
+    fc_pt1_update_cutoff(&pid->error_lpf, pid->cfg.flte_hz, dt_s);
+    (void)fc_filter_update_cutoff(&pid->d_filter, pid->cfg.fltd_hz, 0.0f, dt_s);
+}
+
 void fc_rate_pid_configure(fc_rate_pid_t *pid, const fc_rate_pid_config_t *cfg, float dt_s)
 {
     const bool kind_changed = (pid->d_filter.kind != d_filter_kind(cfg));
     pid->cfg = *cfg;
-    pid->dt_s = dt_s;
-    fc_pt1_update_cutoff(&pid->target_lpf, cfg->fltt_hz, dt_s);
-    fc_pt1_update_cutoff(&pid->error_lpf, cfg->flte_hz, dt_s);
     if (kind_changed) {
         (void)fc_filter_init(&pid->d_filter, d_filter_kind(cfg), cfg->fltd_hz, 0.0f, dt_s);
         fc_filter_reset(&pid->d_filter, pid->meas_prev);
-    } else {
-        (void)fc_filter_update_cutoff(&pid->d_filter, cfg->fltd_hz, 0.0f, dt_s);
     }
+    tune_filters(pid, dt_s);
 }
 
 void fc_rate_pid_reset(fc_rate_pid_t *pid)
@@ -59,8 +64,13 @@ void fc_rate_pid_init(fc_rate_pid_t *pid, const fc_rate_pid_config_t *cfg, float
 float fc_rate_pid_update(fc_rate_pid_t *pid, float target_rad_s, float meas_rad_s, float dt_s,
                          bool mixer_limit, bool integrate)
 {
-    if (!fc_finitef(target_rad_s) || !fc_finitef(meas_rad_s) || !(dt_s > 0.0f)
-        || !fc_finitef(dt_s)) {
+    if (!(dt_s > 0.0f) || !fc_finitef(dt_s)) {
+        return pid->info.out_us;
+    }
+    if (fc_retune_needed(pid->dt_s, dt_s)) {
+        tune_filters(pid, dt_s); /* the step's own period: the filters follow it */
+    }
+    if (!fc_finitef(target_rad_s) || !fc_finitef(meas_rad_s)) {
         return pid->info.out_us;
     }
     const fc_rate_pid_config_t *cfg = &pid->cfg;

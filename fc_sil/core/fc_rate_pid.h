@@ -61,15 +61,22 @@ typedef struct fc_rate_pid {
     fc_pid_info_t info;
 } fc_rate_pid_t;
 
+/* dt_s: the period the filters start with (the nominal loop period). */
 void fc_rate_pid_init(fc_rate_pid_t *pid, const fc_rate_pid_config_t *cfg, float dt_s);
 /* New gains, cutoffs or loop period; filter states and integrator kept (a
- * change of D filter kind re-primes the D filter at the last measurement). */
+ * change of D filter kind re-primes the D filter at the last measurement).
+ * A host that steps at a measured period passes pid->dt_s here and leaves the
+ * period to fc_rate_pid_update. */
 void fc_rate_pid_configure(fc_rate_pid_t *pid, const fc_rate_pid_config_t *cfg, float dt_s);
 /* Clear filters and integrator; the next update primes from its inputs. */
 void fc_rate_pid_reset(fc_rate_pid_t *pid);
 void fc_rate_pid_reset_integrator(fc_rate_pid_t *pid);
-/* One step; returns out_us (also in pid->info). Non-finite input: FC output
- * is the previous one and nothing is updated. */
+/* One step of dt_s, the period since the previous step [s]: I and D use it,
+ * and the filters are recomputed for it when it moves by more than
+ * FC_RETUNE_TOLERANCE (fc_math.h) from pid->dt_s, so the period enters the PID
+ * through this one argument. Returns out_us (also in pid->info). A non-finite
+ * target or measurement returns the previous output and updates nothing but
+ * the filter period. */
 float fc_rate_pid_update(fc_rate_pid_t *pid, float target_rad_s, float meas_rad_s, float dt_s,
                          bool mixer_limit, bool integrate);
 

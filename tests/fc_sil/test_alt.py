@@ -1,4 +1,4 @@
-"""fc_alt_est.c + fc_alt_ctrl.c + the spool logic of fc_core.c: the vertical channel.
+"""fc_alt_est.c + fc_alt_ctrl.c + the spool logic of fc_spool.c: the vertical channel.
 
 The FC flies a level vertical point mass (four motors with a first-order lag,
 thrust linear in PWM) in closed loop, one IMU record per millisecond and a

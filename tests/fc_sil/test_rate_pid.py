@@ -100,3 +100,19 @@ def test_non_finite_inputs_keep_the_previous_output():
     assert np.isfinite(out).all()
     assert np.all(out[:, OUT] == first[-1, OUT])
     assert p.run([0.2], [0.0])[0, OUT] > first[-1, OUT]   # and carries on afterwards
+
+
+def test_the_period_enters_through_the_step_only():
+    """Stepped at another period than the one it was built for, the PID recomputes its
+    filters for the step's period (fc_rate_pid_update): it then equals one built for it."""
+    rng = np.random.default_rng(5)
+    tgt, meas = rng.normal(size=300), rng.normal(size=300)
+    kw = dict(fltt_hz=20.0, flte_hz=30.0, fltd_hz=40.0, d_clamp=False)
+    moved = pid(**kw)
+    moved.dt_s = 1.0 / 400.0
+    built = B.RatePID(400.0, **kw)
+    np.testing.assert_array_equal(moved.run(tgt, meas), built.run(tgt, meas))
+    # Within FC_RETUNE_TOLERANCE (1 %) the filters keep their period.
+    near = pid(**kw)
+    near.dt_s = 1.0 / LOOP_HZ * 1.005
+    assert not np.array_equal(near.run(tgt, meas), B.RatePID(LOOP_HZ / 1.005, **kw).run(tgt, meas))

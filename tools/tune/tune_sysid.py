@@ -195,7 +195,7 @@ def summarise_axis(axis: str, out: dict | None, inp: dict | None, cfg: SweepConf
 
 
 def us_per_unit(params: dict) -> float:
-    """PWM us per normalised rate-loop unit: half the PWM range (fc_core.c)."""
+    """PWM us per normalised rate-loop unit: half the PWM range (fc_config_map.c)."""
     from silbridge.fc_sil.params import BY_NAME
     lo = params.get("MOT_PWM_MIN", BY_NAME["MOT_PWM_MIN"].default)
     hi = params.get("MOT_PWM_MAX", BY_NAME["MOT_PWM_MAX"].default)
