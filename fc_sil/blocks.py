@@ -235,7 +235,8 @@ class RatePID:
         t = _f32(target_rad_s)
         lim = np.zeros(len(t), np.uint8) if limit is None else \
             np.ascontiguousarray(np.broadcast_to(limit, len(t)), dtype=np.uint8)
-        return _blocks.pid_run(self._s, t, _f32(meas_rad_s), lim, dt_s=self.dt_s, integrate=integrate)
+        return _blocks.pid_run(self._s, t, _f32(meas_rad_s), lim, dt_s=self.dt_s,
+                               integrate=integrate)
 
 
 class HoverTrim:
@@ -255,7 +256,8 @@ class HoverTrim:
     def run(self, airborne, ex_rad, ey_rad, dt_s: float) -> np.ndarray:
         """Applied trim (n, 2) [us], roll and pitch."""
         air = np.ascontiguousarray(airborne, dtype=np.uint8)
-        return _blocks.trim_run(self._s, air, _f32(ex_rad), _f32(ey_rad), config=self.cfg, dt_s=dt_s)
+        return _blocks.trim_run(self._s, air, _f32(ex_rad), _f32(ey_rad), config=self.cfg,
+                                dt_s=dt_s)
 
 
 class Blend:

@@ -4,8 +4,9 @@
  * Core.attach_io(segment_capsule, fc_sim_word=, latency_ns=, period_ns=, e2e_ns=, words=)
  * binds the segment (shm/include/sb_capi.h, the peer's side), FcLoop's three int64
  * statistics rings and an int64[FC_IO_WORDS] array of counters (core_object.h; the
- * C poll carries on from their values, which FcLoop's Python poll keeps too); Core.poll_io() then does what fc_sil/runtime.py FcLoop.poll
- * does in Python, with the same clock readings in the same places: pop every
+ * C poll carries on from their values, which FcLoop's Python poll keeps too);
+ * Core.poll_io() then does what fc_sil/runtime.py FcLoop.poll does in Python, with
+ * the same clock readings in the same places: pop every
  * waiting sensor record into the bound record array (bind_batch), stamp the
  * consume time, run the core over them, push the PWM records, stamp the publish
  * time, acknowledge the lockstep step (FC_SIM_NS) when the batch ends one, store

@@ -92,11 +92,7 @@ static PyObject *shaper_reset(PyObject *m, PyObject *args, PyObject *kwds)
     if (s) {
         fc_shaper_reset(s, e);
     }
-    PyBuffer_Release(&b);
-    if (!s) {
-        return NULL;
-    }
-    Py_RETURN_NONE;
+    return fc_blk_release_none(&b, s != NULL);
 }
 
 /* cmd: (n, 4) roll, pitch, yaw, yaw rate; hold_yaw: (n,) flags. Returns (n, 9):

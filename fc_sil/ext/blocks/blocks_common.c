@@ -21,6 +21,15 @@ void *fc_blk_state(Py_buffer *view, size_t size, const char *what)
     return view->buf;
 }
 
+PyObject *fc_blk_release_none(Py_buffer *view, int ok)
+{
+    PyBuffer_Release(view);
+    if (!ok) {
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
 PyArrayObject *fc_blk_f32_in(PyObject *obj, int cols, const char *what)
 {
     PyArrayObject *a = (PyArrayObject *)PyArray_FROMANY(obj, NPY_FLOAT32, 1, 2,

@@ -28,6 +28,10 @@
  * NULL with a Python error set otherwise. */
 void *fc_blk_state(Py_buffer *view, size_t size, const char *what);
 
+/* The end of a call that returns nothing: release the state buffer, then None when ok,
+ * else NULL (the error is already set). */
+PyObject *fc_blk_release_none(Py_buffer *view, int ok);
+
 /* A C-contiguous float32 array of shape (n,) (cols 0) or (n, cols); NULL + error otherwise. */
 PyArrayObject *fc_blk_f32_in(PyObject *obj, int cols, const char *what);
 /* A C-contiguous 1-D uint8 array of flags; NULL + error otherwise. */
@@ -53,8 +57,9 @@ typedef struct {
  * there and no other key. 1 on success, 0 with a TypeError/KeyError naming the field. */
 int fc_blk_config(PyObject *obj, const fc_blk_field_t *fields, size_t n_fields, void *cfg,
                   size_t size, const char *what);
-#define FC_BLK_CONFIG(obj, fields, cfg, what) \
-    fc_blk_config((obj), (fields), sizeof(fields) / sizeof((fields)[0]), (cfg), sizeof *(cfg), (what))
+#define FC_BLK_CONFIG(obj, fields, cfg, what)                                              \
+    fc_blk_config((obj), (fields), sizeof(fields) / sizeof((fields)[0]), (cfg), sizeof *(cfg), \
+                  (what))
 
 /* A method table entry's function and flags for a function taking keywords. */
 #define FC_BLK_KW(f) (PyCFunction)(void (*)(void))(f), METH_VARARGS | METH_KEYWORDS

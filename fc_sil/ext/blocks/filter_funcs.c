@@ -57,11 +57,7 @@ static PyObject *filter_reset(PyObject *m, PyObject *args, PyObject *kwds)
     if (f) {
         fc_filter_reset(f, v);
     }
-    PyBuffer_Release(&b);
-    if (!f) {
-        return NULL;
-    }
-    Py_RETURN_NONE;
+    return fc_blk_release_none(&b, f != NULL);
 }
 
 static PyObject *filter_apply(PyObject *m, PyObject *args)
@@ -140,7 +136,8 @@ static PyObject *ins_run(PyObject *m, PyObject *args)
         st = PyArray_SimpleNew(1, dims, NPY_INT8);
         if (ga && aa && st) {
             const float *a = PyArray_DATA(acc), *g = PyArray_DATA(gyr);
-            float *go_ = PyArray_DATA((PyArrayObject *)ga), *ao_ = PyArray_DATA((PyArrayObject *)aa);
+            float *go_ = PyArray_DATA((PyArrayObject *)ga);
+            float *ao_ = PyArray_DATA((PyArrayObject *)aa);
             int8_t *s = PyArray_DATA((PyArrayObject *)st);
             for (npy_intp i = 0; i < n; i++) {
                 s[i] = (int8_t)fc_ins_update(ins, &a[3 * i], &g[3 * i]);

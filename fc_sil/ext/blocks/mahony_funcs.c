@@ -40,11 +40,7 @@ static PyObject *mahony_init(PyObject *m, PyObject *args, PyObject *kwds)
     if (ok) {
         fc_mahony_init(mh, &cfg);
     }
-    PyBuffer_Release(&b);
-    if (!ok) {
-        return NULL;
-    }
-    Py_RETURN_NONE;
+    return fc_blk_release_none(&b, ok);
 }
 
 static PyObject *mahony_set_attitude(PyObject *m, PyObject *args, PyObject *kwds)
@@ -61,11 +57,7 @@ static PyObject *mahony_set_attitude(PyObject *m, PyObject *args, PyObject *kwds
     if (mh) {
         fc_mahony_set_attitude(mh, q);
     }
-    PyBuffer_Release(&b);
-    if (!mh) {
-        return NULL;
-    }
-    Py_RETURN_NONE;
+    return fc_blk_release_none(&b, mh != NULL);
 }
 
 static PyObject *mahony_mag(PyObject *m, PyObject *args, PyObject *kwds)

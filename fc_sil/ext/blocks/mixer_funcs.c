@@ -35,11 +35,7 @@ static PyObject *mixer_reset(PyObject *m, PyObject *args, PyObject *kwds)
     if (ok) {
         fc_mixer_reset(mx, &cfg);
     }
-    PyBuffer_Release(&b);
-    if (!ok) {
-        return NULL;
-    }
-    Py_RETURN_NONE;
+    return fc_blk_release_none(&b, ok);
 }
 
 /* inputs (n, 4): throttle, roll, pitch, yaw [us]. Returns (motor (n,4) f4,
@@ -70,7 +66,8 @@ static PyObject *mixer_run(PyObject *m, PyObject *args, PyObject *kwds)
         fo = PyArray_SimpleNew(1, d1, NPY_UINT8);
         if (mo && ao && po && fo) {
             const float *x = PyArray_DATA(in);
-            float *mot = PyArray_DATA((PyArrayObject *)mo), *app = PyArray_DATA((PyArrayObject *)ao);
+            float *mot = PyArray_DATA((PyArrayObject *)mo);
+            float *app = PyArray_DATA((PyArrayObject *)ao);
             uint16_t *pw = PyArray_DATA((PyArrayObject *)po);
             uint8_t *fl = PyArray_DATA((PyArrayObject *)fo);
             for (npy_intp i = 0; i < n; i++) {

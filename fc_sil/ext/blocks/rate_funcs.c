@@ -47,11 +47,7 @@ static PyObject *pid_setup(PyObject *args, PyObject *kwds, int keep_state)
             fc_rate_pid_init(pid, &cfg, dt);
         }
     }
-    PyBuffer_Release(&b);
-    if (!ok) {
-        return NULL;
-    }
-    Py_RETURN_NONE;
+    return fc_blk_release_none(&b, ok);
 }
 
 static PyObject *pid_init(PyObject *m, PyObject *args, PyObject *kwds)
@@ -85,7 +81,8 @@ static PyObject *pid_run(PyObject *m, PyObject *args, PyObject *kwds)
     fc_rate_pid_t *pid = fc_blk_state(&b, sizeof *pid, "rate_pid");
     if (pid && (tgt = fc_blk_f32_in(to, 0, "target"))
         && (meas = fc_blk_f32_in(mo, 0, "measurement")) && (lim = fc_blk_u8_in(lo, "limit"))
-        && fc_blk_same_len(PyArray_DIM(tgt, 0), meas) && fc_blk_same_len(PyArray_DIM(tgt, 0), lim)) {
+        && fc_blk_same_len(PyArray_DIM(tgt, 0), meas)
+        && fc_blk_same_len(PyArray_DIM(tgt, 0), lim)) {
         const npy_intp n = PyArray_DIM(tgt, 0);
         out = fc_blk_f32_out(n, 7);
         if (out) {
@@ -135,11 +132,7 @@ static PyObject *trim_reset(PyObject *m, PyObject *args)
     if (t) {
         fc_trim_reset(t);
     }
-    PyBuffer_Release(&b);
-    if (!t) {
-        return NULL;
-    }
-    Py_RETURN_NONE;
+    return fc_blk_release_none(&b, t != NULL);
 }
 
 /* Returns the applied trim (n, 2) [us], roll and pitch. */
@@ -195,11 +188,7 @@ static PyObject *blend_reset(PyObject *m, PyObject *args, PyObject *kwds)
     if (bl) {
         fc_blend_reset(bl, w);
     }
-    PyBuffer_Release(&b);
-    if (!bl) {
-        return NULL;
-    }
-    Py_RETURN_NONE;
+    return fc_blk_release_none(&b, bl != NULL);
 }
 
 static PyObject *blend_run(PyObject *m, PyObject *args, PyObject *kwds)
