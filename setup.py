@@ -42,9 +42,24 @@ if core_src:
         Extension(
             "silbridge.fc_sil._core",
             core_src,
-            include_dirs=["fc_sil/core", "shm/include", numpy.get_include()],
+            include_dirs=["fc_sil/core", "shm/include"],
             depends=sources("fc_sil/core/*.h", "fc_sil/core/*.def", "fc_sil/ext/*.h",
                             "shm/include/*.h"),  # rebuild on header / parameter edits
+            extra_compile_args=CFLAGS,
+            libraries=["m"],
+        )
+    )
+
+# The blocks of the core one by one, for fc_sil/blocks.py and the tests only: a module of
+# its own, so the flight's _core carries none of it. It compiles the core's sources too.
+blocks_src = sources("fc_sil/ext/blocks/*.c")
+if blocks_src:
+    extensions.append(
+        Extension(
+            "silbridge.fc_sil._blocks",
+            sources("fc_sil/core/*.c") + blocks_src,
+            include_dirs=["fc_sil/core", numpy.get_include()],
+            depends=sources("fc_sil/core/*.h", "fc_sil/core/*.def", "fc_sil/ext/blocks/*.h"),
             extra_compile_args=CFLAGS,
             libraries=["m"],
         )
@@ -65,7 +80,7 @@ if step_src:
         )
     )
 
-# SILBRIDGE_EXT=ring (or core, step) builds one extension only: handy while another
+# SILBRIDGE_EXT=ring (or core, blocks, step) builds one extension only: handy while another
 # extension's sources are mid-edit (`SILBRIDGE_EXT=ring python setup.py build_ext --inplace`).
 only = os.environ.get("SILBRIDGE_EXT")
 if only:

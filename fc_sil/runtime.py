@@ -160,8 +160,8 @@ class FcLoop:
             self._detach_c_poll()
             return False
         if not self._c_attached:
-            c.attach_io(self._c_api(), ls.FC_SIM_NS, self.latency_ns._arr,
-                        self.period_ns._arr, self.e2e_ns._arr, self._io)
+            c.attach_io(self._c_api(), fc_sim_word=ls.FC_SIM_NS, latency_ns=self.latency_ns._arr,
+                        period_ns=self.period_ns._arr, e2e_ns=self.e2e_ns._arr, words=self._io)
             self._c_attached = True
         return True
 

@@ -3,10 +3,12 @@
 The two programs meet only through `shm/` and `mavlink/`, so `bridge/` and `fc_sil/` never
 import each other; `shm/` imports no other part of the project; `mavlink/` knows records and
 messages, not physics or controllers; nothing below the command line imports `tools/` (the
-benchmark toolkit and the command line); and the portable C core includes only its own headers
+benchmark toolkit and the command line); the portable C core includes only its own headers
 and the C standard library, so it compiles on a flight controller as it is. Inside the core,
 estimation and control meet only in the vehicle state (`fc_vehicle_state.h`): the control law
-reads no estimator and no ground truth directly.
+reads no estimator and no ground truth directly. The per-block C bindings (`_blocks`, wrapped
+by `fc_sil/blocks.py`) are for tests only: no program imports them and the flight's `_core`
+carries none of them.
 """
 
 from __future__ import annotations
@@ -105,3 +107,57 @@ def test_the_checker_sees_a_crossing(tmp_path):
     f = tmp_path / "x.py"
     f.write_text("from silbridge.fc_sil.params import PARAMS\nfrom ..tools import cli\n")
     assert _imported_parts(f, "bridge") == {"fc_sil", "tools"}
+
+
+BLOCK_BINDINGS = {"blocks", "_blocks"}   # fc_sil/blocks.py and the extension it wraps
+
+
+def _imports_block_bindings(path: Path) -> bool:
+    """Whether a file imports fc_sil.blocks or fc_sil._blocks, in any import form."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    in_fc_sil = path.parent.name == "fc_sil"
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            mods = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level == 1 and in_fc_sil:      # from . import blocks / from .blocks import
+                base = f"silbridge.fc_sil.{base}".rstrip(".")
+            elif node.level >= 2:                  # from ..fc_sil import blocks
+                base = f"silbridge.{base}"
+            mods = [base] + [f"{base}.{a.name}" for a in node.names]
+        else:
+            continue
+        if any(m.split(".")[:2] == ["silbridge", "fc_sil"] and len(m.split(".")) > 2
+               and m.split(".")[2] in BLOCK_BINDINGS for m in mods):
+            return True
+    return False
+
+
+def test_only_tests_use_the_block_bindings():
+    bad = []
+    for part in PARTS:
+        for path in sorted((ROOT / part).rglob("*.py")):
+            if path != ROOT / "fc_sil" / "blocks.py" and _imports_block_bindings(path):
+                bad.append(str(path.relative_to(ROOT)))
+    assert not bad, "test-only block bindings imported by:\n" + "\n".join(bad)
+
+
+def test_the_flight_core_module_carries_no_block_binding():
+    from silbridge.fc_sil import _blocks, _core
+    shared = {n for n in dir(_blocks) if not n.startswith("__")} & set(dir(_core))
+    assert not shared, f"_core exports block bindings: {sorted(shared)}"
+
+
+def test_the_block_binding_check_sees_an_import(tmp_path):
+    pkg = tmp_path / "fc_sil"
+    pkg.mkdir()
+    for i, text in enumerate(("from . import _blocks\n", "from .blocks import Mixer\n",
+                              "from silbridge.fc_sil import blocks\n",
+                              "import silbridge.fc_sil._blocks\n")):
+        f = pkg / f"m{i}.py"
+        f.write_text(text)
+        assert _imports_block_bindings(f), text
+    ok = pkg / "ok.py"
+    ok.write_text("from . import _core\nfrom silbridge.fc_sil.params import BY_NAME\n")
+    assert not _imports_block_bindings(ok)

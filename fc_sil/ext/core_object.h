@@ -1,12 +1,22 @@
 /*
- * core_object.h - the Core object of silbridge.fc_sil._core, shared by
- * coremodule.c (construction, parameters, record batches, logging queues) and
- * corepoll.c (the whole FC poll over the shared-memory rings in one call).
+ * core_object.h - the Core object of silbridge.fc_sil._core and what its files share.
+ *
+ * The extension is one file per concept: core_object.c (life cycle, parameters, the
+ * host's inputs), core_steps.c (single steps and the reads of state, for hosts and
+ * tests without records), core_batch.c (record batches: the only place records meet
+ * the core), core_log.c (log capture into bytearrays), corepoll.c (the whole FC poll
+ * over the shared-memory rings), sysidmethods.c (system identification),
+ * core_layout.c and core_bench.c (module functions), coremodule.c (the type and the
+ * module). Each file exports its NULL-terminated method table; coremodule.c joins them.
+ *
+ * Threading: every method runs with the GIL held, so a Core may be shared between a
+ * control thread and, say, a MAVLink thread that sets parameters.
  */
 #ifndef FC_CORE_OBJECT_H
 #define FC_CORE_OBJECT_H
 
-#include "ext_common.h"
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
 
 #include <stdint.h>
 
@@ -67,23 +77,42 @@ typedef struct CoreObject {
     fc_io_t io;               /* attach_io(): the shared-memory poll loop in C (corepoll.c) */
 } CoreObject;
 
-/* coremodule.c */
+/* core_object.c: construction and clean-up (the type's tp_new and tp_dealloc). */
+extern PyMethodDef fc_ext_object_methods[];
+PyObject *fc_ext_core_new(PyTypeObject *type, PyObject *args, PyObject *kwds);
+void fc_ext_core_dealloc(CoreObject *self);
 int64_t fc_ext_monotonic_ns(void);
-/* Consume n records at base; PWM records and status rows to the outputs (cap rows);
- * returns the PWM ticks emitted, or -1 with an exception set. */
+
+/* core_steps.c */
+extern PyMethodDef fc_ext_step_methods[];
+
+/* core_batch.c: consume n records at base; PWM records and status rows to the outputs
+ * (cap rows); returns the PWM ticks emitted, or -1 with an exception set. */
+extern PyMethodDef fc_ext_batch_methods[];
 Py_ssize_t fc_ext_run_records(CoreObject *self, const unsigned char *base, Py_ssize_t n,
                               sb_record *pwm_out, fc_core_status_t *st_out, Py_ssize_t cap);
+/* PWM ticks the bound outputs can hold: the smaller of the two arrays. */
+Py_ssize_t fc_ext_bound_capacity(const CoreObject *self);
+void fc_ext_unbind_batch(CoreObject *self);
+
+/* core_log.c */
+extern PyMethodDef fc_ext_log_methods[];
 int fc_ext_append_bytes(PyObject *ba, const void *src, Py_ssize_t len);
-int fc_ext_log_records(CoreObject *self, const unsigned char *base, Py_ssize_t n);
+/* Log one batch: its n records, its k PWM records (when log_pwm) and status rows;
+ * -1 with an exception on failure. */
+int fc_ext_log_batch(CoreObject *self, const unsigned char *recs, Py_ssize_t n,
+                     const unsigned char *pwm, const fc_core_status_t *status, Py_ssize_t k);
+void fc_ext_clear_log(CoreObject *self);
 
 /* corepoll.c: Core methods attach_io, poll_io; and the clean-up. */
-PyObject *fc_ext_attach_io(CoreObject *self, PyObject *args);
-PyObject *fc_ext_poll_io(CoreObject *self, PyObject *unused);
+extern PyMethodDef fc_ext_poll_methods[];
 void fc_ext_detach_io(CoreObject *self);
 
 /* sysidmethods.c: Core methods sysid_start, sysid_stop, sysid_sample. */
-PyObject *fc_ext_sysid_start(CoreObject *self, PyObject *noargs);
-PyObject *fc_ext_sysid_stop(CoreObject *self, PyObject *noargs);
-PyObject *fc_ext_sysid_sample(CoreObject *self, PyObject *noargs);
+extern PyMethodDef fc_ext_sysid_methods[];
+
+/* core_layout.c and core_bench.c: module functions. */
+extern PyMethodDef fc_ext_layout_functions[];
+extern PyMethodDef fc_ext_bench_functions[];
 
 #endif /* FC_CORE_OBJECT_H */

@@ -1,11 +1,12 @@
 /*
  * corepoll.c - FcLoop.poll in one C call, for the shared-memory transport.
  *
- * Core.attach_io(segment_capsule, fc_sim_word, latency, period, e2e, words) binds
- * the segment (shm/include/sb_capi.h, the peer's side), FcLoop's three int64
+ * Core.attach_io(segment_capsule, fc_sim_word=, latency_ns=, period_ns=, e2e_ns=, words=)
+ * binds the segment (shm/include/sb_capi.h, the peer's side), FcLoop's three int64
  * statistics rings and an int64[FC_IO_WORDS] array of counters (core_object.h; the
- * C poll carries on from their values, which FcLoop's Python poll keeps too); Core.poll_io() then does what fc_sil/runtime.py FcLoop.poll
- * does in Python, with the same clock readings in the same places: pop every
+ * C poll carries on from their values, which FcLoop's Python poll keeps too);
+ * Core.poll_io() then does what fc_sil/runtime.py FcLoop.poll does in Python, with
+ * the same clock readings in the same places: pop every
  * waiting sensor record into the bound record array (bind_batch), stamp the
  * consume time, run the core over them, push the PWM records, stamp the publish
  * time, acknowledge the lockstep step (FC_SIM_NS) when the batch ends one, store
@@ -39,12 +40,16 @@ void fc_ext_detach_io(CoreObject *self)
     memset(io, 0, sizeof *io);
 }
 
-/* attach_io(capsule, fc_sim_word, latency, period, e2e, words); attach_io(None) detaches. */
-PyObject *fc_ext_attach_io(CoreObject *self, PyObject *args)
+/* attach_io(capsule, fc_sim_word=, latency_ns=, period_ns=, e2e_ns=, words=);
+ * attach_io(None) detaches. */
+static PyObject *Core_attach_io(CoreObject *self, PyObject *args, PyObject *kwds)
 {
+    static char *kwlist[] = {"segment", "fc_sim_word", "latency_ns", "period_ns", "e2e_ns",
+                             "words", NULL};
     PyObject *cap, *arr[3] = {NULL, NULL, NULL}, *words = NULL;
     int word = 0;
-    if (!PyArg_ParseTuple(args, "O|iOOOO", &cap, &word, &arr[0], &arr[1], &arr[2], &words))
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O|$iOOOO", kwlist, &cap, &word, &arr[0],
+                                     &arr[1], &arr[2], &words))
         return NULL;
     fc_ext_detach_io(self);
     if (cap == Py_None)
@@ -57,9 +62,10 @@ PyObject *fc_ext_attach_io(CoreObject *self, PyObject *args)
                                           "built with the same shm version");
         return NULL;
     }
-    if (word < 0 || (unsigned)word >= SB_SEG_WORDS || words == NULL) {
-        PyErr_SetString(PyExc_ValueError,
-                        "attach_io(capsule, fc_sim_word, latency, period, e2e, words)");
+    if (word < 0 || (unsigned)word >= SB_SEG_WORDS || words == NULL || arr[0] == NULL ||
+        arr[1] == NULL || arr[2] == NULL) {
+        PyErr_SetString(PyExc_ValueError, "attach_io(capsule, fc_sim_word=, latency_ns=, "
+                                          "period_ns=, e2e_ns=, words=)");
         return NULL;
     }
     if (!self->have_bound) {
@@ -108,7 +114,7 @@ static inline void series_add(fc_io_t *io, int i, int64_t v)
     (*n)++;
 }
 
-PyObject *fc_ext_poll_io(CoreObject *self, PyObject *Py_UNUSED(unused))
+static PyObject *Core_poll_io(CoreObject *self, PyObject *Py_UNUSED(unused))
 {
     fc_io_t *io = &self->io;
     if (io->api == NULL) {
@@ -128,12 +134,8 @@ PyObject *fc_ext_poll_io(CoreObject *self, PyObject *Py_UNUSED(unused))
         return PyLong_FromLong(0);
     const int64_t consume = fc_ext_monotonic_ns();
     sb_record *pwm = self->bound[1].buf;
-    const Py_ssize_t out_cap = self->bound[1].len / SB_RECORD_SIZE <
-                                       self->bound[2].len / (Py_ssize_t)sizeof(fc_core_status_t)
-                                   ? self->bound[1].len / SB_RECORD_SIZE
-                                   : self->bound[2].len / (Py_ssize_t)sizeof(fc_core_status_t);
     const Py_ssize_t k = fc_ext_run_records(self, (const unsigned char *)recs, (Py_ssize_t)n,
-                                            pwm, self->bound[2].buf, out_cap);
+                                            pwm, self->bound[2].buf, fc_ext_bound_capacity(self));
     if (k < 0)
         return NULL;
     const sb_header *newest = &recs[n - 1].h;
@@ -162,13 +164,8 @@ PyObject *fc_ext_poll_io(CoreObject *self, PyObject *Py_UNUSED(unused))
     io->words[FC_IO_RECORDS] += (int64_t)n;
     io->words[FC_IO_LAST_K] = k;
     /* The log: records and PWM to their kinds' queues, status rows, the /timing row. */
-    if (self->log_on && (fc_ext_log_records(self, (const unsigned char *)recs, (Py_ssize_t)n) < 0 ||
-                         (self->log_pwm &&
-                          fc_ext_log_records(self, (const unsigned char *)pwm, k) < 0)))
-        return NULL;
-    if (self->log_status != NULL &&
-        fc_ext_append_bytes(self->log_status, self->bound[2].buf,
-                            k * (Py_ssize_t)sizeof(fc_core_status_t)) < 0)
+    if (fc_ext_log_batch(self, (const unsigned char *)recs, (Py_ssize_t)n,
+                         (const unsigned char *)pwm, self->bound[2].buf, k) < 0)
         return NULL;
     if (self->log_timing != NULL) {
         const int64_t row[5] = {newest->sim_ns, newest->wall_ns, consume, pwm_wall, period};
@@ -177,3 +174,13 @@ PyObject *fc_ext_poll_io(CoreObject *self, PyObject *Py_UNUSED(unused))
     }
     return PyLong_FromUnsignedLongLong(n);
 }
+
+PyMethodDef fc_ext_poll_methods[] = {
+    {"attach_io", (PyCFunction)(void (*)(void))Core_attach_io, METH_VARARGS | METH_KEYWORDS,
+     "attach_io(segment._c_api(), fc_sim_word=, latency_ns=, period_ns=, e2e_ns=, words=): "
+     "poll_io's segment, int64 statistics rings and counters (core_object.h); "
+     "attach_io(None) detaches."},
+    {"poll_io", (PyCFunction)Core_poll_io, METH_NOARGS,
+     "poll_io() -> records consumed: FcLoop.poll over shared memory in C (corepoll.c)."},
+    {NULL, NULL, 0, NULL},
+};

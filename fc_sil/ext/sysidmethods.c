@@ -2,19 +2,17 @@
  * sysidmethods.c - the Core methods of system identification (fc_sysid.h):
  * sysid_start, sysid_stop, and sysid_sample, which the tuning tools call after
  * every lockstep step to record the sweep and the rate-loop signals it moves.
- * Kept apart from coremodule.c so the identification surface is one small file.
+ * Kept apart from the other Core methods so the identification surface is one small file.
  */
-#include "ext_common.h"
-
 #include "core_object.h"
 
-PyObject *fc_ext_sysid_start(CoreObject *self, PyObject *noargs)
+static PyObject *Core_sysid_start(CoreObject *self, PyObject *noargs)
 {
     (void)noargs;
     return PyLong_FromLong((long)fc_core_sysid_start(&self->core));
 }
 
-PyObject *fc_ext_sysid_stop(CoreObject *self, PyObject *noargs)
+static PyObject *Core_sysid_stop(CoreObject *self, PyObject *noargs)
 {
     (void)noargs;
     fc_core_sysid_stop(&self->core);
@@ -26,7 +24,7 @@ PyObject *fc_ext_sysid_stop(CoreObject *self, PyObject *noargs)
  *   rate_target[3] (rad/s, the sweep included), rate[3] (the rate loop's gyro, rad/s),
  *   pid_out[3] (rate-loop outputs before a mixer sweep, us),
  *   mixer_in[3] (roll, pitch, yaw mixer inputs after the sweep and trim, us). */
-PyObject *fc_ext_sysid_sample(CoreObject *self, PyObject *noargs)
+static PyObject *Core_sysid_sample(CoreObject *self, PyObject *noargs)
 {
     (void)noargs;
     const fc_core_t *c = &self->core;
@@ -41,3 +39,12 @@ PyObject *fc_ext_sysid_sample(CoreObject *self, PyObject *noargs)
                          (double)c->pid_out_us[2], (double)c->cr_us, (double)c->cp_us,
                          (double)c->cy_us);
 }
+
+PyMethodDef fc_ext_sysid_methods[] = {
+    {"sysid_start", (PyCFunction)Core_sysid_start, METH_NOARGS,
+     "Start the SID_* sweep -> status code (FC_ERR_ARG: SID_AXIS 0 or bad sweep)."},
+    {"sysid_stop", (PyCFunction)Core_sysid_stop, METH_NOARGS, "Stop the sweep."},
+    {"sysid_sample", (PyCFunction)Core_sysid_sample, METH_NOARGS,
+     "Sweep state and rate-loop signals of the latest step (sysidmethods.c)."},
+    {NULL, NULL, 0, NULL},
+};

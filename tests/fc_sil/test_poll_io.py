@@ -57,7 +57,8 @@ def test_attach_io_refuses_the_owner_side_and_a_closed_segment():
     rings = [np.zeros(8, np.int64) for _ in range(3)]
     with Segment.create("pollio-own") as seg:
         with pytest.raises(ValueError, match="peer"):
-            core._c.attach_io(seg._c_api(), ls.FC_SIM_NS, *rings, np.zeros(8, np.int64))
+            core._c.attach_io(seg._c_api(), fc_sim_word=ls.FC_SIM_NS, latency_ns=rings[0],
+                              period_ns=rings[1], e2e_ns=rings[2], words=np.zeros(8, np.int64))
         with Segment.attach("pollio-own") as fc_seg:
             loop = FcLoop(FlightCore(), fc_seg)
             assert loop.poll == loop._poll_c

@@ -72,7 +72,7 @@ def measure(samples: int = 400_000, batch: int = 4096, imu_hz: float = 1000.0,
 
     best_c = None
     for _ in range(repeat):
-        r = _core.bench_steps(samples, max(1, samples // 4), imu_hz)
+        r = _core.bench_steps(n_imu=samples, n_pwm=max(1, samples // 4), imu_hz=imu_hz)
         if best_c is None or r["imu_step_ns"] < best_c["imu_step_ns"]:
             best_c = r
     recs = _record_mix(samples, imu_hz)

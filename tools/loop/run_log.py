@@ -45,7 +45,8 @@ class RunLogSink:
 
         def bind():
             queues, stage, status, tm = writer.capture_targets(STATUS_DTYPE)
-            core_c.bind_log(queues, stage, status, self._fc_logs_pwm, tm if timing else None)
+            core_c.bind_log(queues, stage=stage, status=status, log_pwm=self._fc_logs_pwm,
+                            timing=tm if timing else None)
         bind()
         writer.set_capture_rebind(bind)
         self._unbind = lambda: core_c.bind_log(None)
