@@ -23,12 +23,18 @@ import time
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.mavlink.framing import FrameDecoder, RxCounters
-from silbridge.mavlink.hil.hil_errors import HilConnectError, HilPeerLost
+from silbridge.mavlink.hil.hil_errors import HilConnectError
+from silbridge.mavlink.hil.hil_write import WriteTexts, write_all
 
 DEFAULT_PORT = 4560
 _DGRAM_BYTES = 32 * 1024
 _SOCK_BUF_BYTES = 4 << 20
 _RECV_BYTES = 1 << 20
+_TCP_TEXTS = WriteTexts(
+    failed="TCP peer lost while sending ({why})",
+    failed_hint="the HIL peer disconnected ({error}); restart it",
+    stalled="the TCP peer read nothing for {timeout_s:g} s",
+    stalled_hint="{error}: it is hung or stopped; the run stops")
 
 
 def parse_addr(text: str | None, default_host: str = "127.0.0.1") -> tuple[str, int]:
@@ -123,24 +129,7 @@ class HilChannel:
         return refused
 
     def _send_tcp(self, data: bytes) -> None:
-        view = memoryview(data)
-        deadline = None
-        while view:
-            try:
-                n = self.sock.send(view)
-                view = view[n:]
-                continue
-            except (BlockingIOError, InterruptedError):
-                pass
-            except OSError as exc:
-                self._lost(f"TCP peer lost while sending ({exc.strerror or exc})")
-                raise HilPeerLost(f"the HIL peer disconnected ({self.error}); restart it") from None
-            now = time.monotonic()
-            deadline = deadline or now + self.send_timeout_s
-            if now > deadline:
-                self._lost(f"the TCP peer read nothing for {self.send_timeout_s:g} s")
-                raise HilPeerLost(f"{self.error}: it is hung or stopped; the run stops")
-            select.select([], [self.sock], [], 0.01)
+        write_all(self.sock.send, self.sock, data, self.send_timeout_s, self._lost, _TCP_TEXTS)
 
     # -- receive ----------------------------------------------------------------------------
     def receive(self, timeout_s: float = 0.0) -> list:

@@ -19,13 +19,18 @@ import errno
 import os
 import select
 import termios
-import time
 
 from silbridge.mavlink.framing import FrameDecoder, RxCounters
-from silbridge.mavlink.hil.hil_errors import HilConnectError, HilPeerLost
+from silbridge.mavlink.hil.hil_errors import HilConnectError
+from silbridge.mavlink.hil.hil_write import WriteTexts, write_all
 
 DEFAULT_BAUD = 921600
 _RECV_BYTES = 1 << 16
+_SERIAL_TEXTS = WriteTexts(
+    failed="writing to the serial line failed ({why})",
+    failed_hint="the HIL peer is gone ({error})",
+    stalled="the serial line took nothing for {timeout_s:g} s",
+    stalled_hint="{error}: the board stopped reading; the run stops")
 
 
 def is_serial(addr: str | None) -> bool:
@@ -94,27 +99,11 @@ class SerialChannel:
     def send(self, frames: list) -> int:
         if not frames or self.eof:
             return 0
-        data = memoryview(b"".join(frames))
-        n_bytes = len(data)
-        deadline = None
-        while data:
-            try:
-                n = os.write(self.fd, data)
-                data = data[n:]
-                continue
-            except (BlockingIOError, InterruptedError):
-                pass
-            except OSError as e:
-                self._lost(f"writing to the serial line failed ({e.strerror or e})")
-                raise HilPeerLost(f"the HIL peer is gone ({self.error})") from None
-            now = time.monotonic()
-            deadline = deadline or now + self.send_timeout_s
-            if now > deadline:
-                self._lost(f"the serial line took nothing for {self.send_timeout_s:g} s")
-                raise HilPeerLost(f"{self.error}: the board stopped reading; the run stops")
-            select.select([], [self.fd], [], 0.01)
+        data = b"".join(frames)
+        write_all(lambda view: os.write(self.fd, view), self.fd, data, self.send_timeout_s,
+                  self._lost, _SERIAL_TEXTS)
         self.tx_frames += len(frames)
-        self.tx_bytes += n_bytes
+        self.tx_bytes += len(data)
         return 0
 
     def receive(self, timeout_s: float = 0.0) -> list:
