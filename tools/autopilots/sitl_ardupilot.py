@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import os
 import select
-import shutil
+import signal
 import socket
 import subprocess
 import threading
@@ -41,6 +41,14 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 from silbridge.bridge.ardupilot_physics import euler_from_quat
 
 from silbridge.tools.autopilots.ardupilot_log import SOURCE_ATTITUDE_TARGET, SOURCE_NAV_CONTROLLER
+from silbridge.tools.autopilots.autopilot_run import (
+    STOP_GRACE_S,
+    Autopilot,
+    find_binary,
+    log_tail,
+    port_free,
+    stop_process,
+)
 
 ENV_BINARY = "SILBRIDGE_ARDUCOPTER"
 MAVLINK_TCP_BASE = 5760
@@ -50,6 +58,7 @@ COPTER_MODE_GUIDED = 4
 RETRY_SIM_S = 2.0           # between arming attempts, in sim time (what SITL's checks see)
 STREAM_HZ = 50.0
 POSITION_STREAM_HZ = 10.0   # GLOBAL_POSITION_INT: the altitude the setpoint forwarder reads
+SITL_LOG = "sitl.log"       # SITL's console output, in its working directory
 
 HOW_TO_GET = (
     "no ArduCopter SITL binary: give --sitl PATH, set SILBRIDGE_ARDUCOPTER, or put "
@@ -65,25 +74,7 @@ class SitlError(Exception):
 
 def find_arducopter(explicit: str | None = None) -> str | None:
     """The arducopter binary to use, or None: --sitl, then $SILBRIDGE_ARDUCOPTER, then PATH."""
-    for cand in (explicit, os.environ.get(ENV_BINARY)):
-        if cand:
-            if os.path.isfile(cand) and os.access(cand, os.X_OK):
-                return os.path.abspath(cand)
-            raise SitlError(f"ArduCopter SITL binary {cand!r} does not exist or is not "
-                            "executable: build it with `./waf copter` in an ArduPilot checkout "
-                            "(build/sitl/bin/arducopter)")
-    return shutil.which("arducopter")
-
-
-def _port_free(kind: int, port: int) -> bool:
-    s = socket.socket(socket.AF_INET, kind)
-    try:
-        s.bind(("127.0.0.1", port))
-        return True
-    except OSError:
-        return False
-    finally:
-        s.close()
+    return find_binary(ARDUCOPTER, explicit)
 
 
 def pick_instance(start: int | None = None, tries: int = 200) -> int:
@@ -92,8 +83,8 @@ def pick_instance(start: int | None = None, tries: int = 200) -> int:
     for i in range(tries):
         n = (first + i) % 500 + 1
         tcp = [MAVLINK_TCP_BASE + PORT_STRIDE * n + k for k in (0, 2, 3)]
-        if all(_port_free(socket.SOCK_STREAM, p) for p in tcp) and \
-                _port_free(socket.SOCK_DGRAM, JSON_UDP_BASE + PORT_STRIDE * n):
+        if all(port_free(socket.SOCK_STREAM, p) for p in tcp) and \
+                port_free(socket.SOCK_DGRAM, JSON_UDP_BASE + PORT_STRIDE * n):
             return n
     raise SitlError("no free SITL instance (ports 5760+10N, 9002+10N) in 200 tries: stop "
                     "stale arducopter processes")
@@ -132,7 +123,7 @@ def start_sitl(binary: str, instance: int, workdir: str, *, speedup: float, home
     home_arg = f"{home.lat_deg},{home.lon_deg},{home.alt_m},{home.heading_deg}"
     cmd = [binary, "--model", model, "--speedup", f"{speedup:g}",
            "--instance", str(instance), "--defaults", defaults_path, "--home", home_arg, "-w"]
-    log = open(os.path.join(workdir, "sitl.log"), "w")
+    log = open(os.path.join(workdir, SITL_LOG), "w")
     try:
         return subprocess.Popen(cmd, cwd=workdir, stdout=log, stderr=subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL)
@@ -140,22 +131,19 @@ def start_sitl(binary: str, instance: int, workdir: str, *, speedup: float, home
         log.close()
 
 
-def stop_sitl(proc: subprocess.Popen, timeout_s: float = 3.0) -> None:
-    if proc.poll() is None:
-        proc.terminate()
-        try:
-            proc.wait(timeout_s)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+def stop_sitl(proc: subprocess.Popen, timeout_s: float = STOP_GRACE_S) -> None:
+    """SIGTERM, then SIGKILL after timeout_s."""
+    stop_process(proc, signal.SIGTERM, timeout_s)
 
 
 def sitl_log_tail(workdir: str, lines: int = 8) -> str:
-    try:
-        with open(os.path.join(workdir, "sitl.log"), errors="replace") as fh:
-            return " | ".join(fh.read().strip().splitlines()[-lines:])
-    except OSError:
-        return ""
+    return log_tail(os.path.join(workdir, SITL_LOG), lines)
+
+
+ARDUCOPTER = Autopilot(
+    name="ArduCopter", error=SitlError, env=ENV_BINARY, command="arducopter",
+    build_hint="`./waf copter` in an ArduPilot checkout (build/sitl/bin/arducopter)",
+    log_name=SITL_LOG, pick=pick_instance, stop=lambda proc, instance: stop_sitl(proc))
 
 
 class MavlinkDriver(threading.Thread):
