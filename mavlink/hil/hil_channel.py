@@ -22,9 +22,8 @@ import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.framing import FrameDecoder, RxCounters
 from silbridge.mavlink.hil.hil_errors import HilConnectError
-from silbridge.mavlink.hil.hil_write import WriteTexts, write_all
+from silbridge.mavlink.hil.hil_link import HilLink, WriteTexts
 
 DEFAULT_PORT = 4560
 _DGRAM_BYTES = 32 * 1024
@@ -67,23 +66,15 @@ def _tune(sock: socket.socket) -> None:
     sock.setblocking(False)
 
 
-class HilChannel:
+class HilChannel(HilLink):
     """A connected (TCP) or peer-learning (UDP) HIL socket with its codec and counters."""
 
     def __init__(self, sock: socket.socket, datagram: bool, codec, peer=None,
                  send_timeout_s: float = 5.0):
+        super().__init__(codec, send_timeout_s)
         self.sock = sock
         self.datagram = datagram
-        self.codec = codec
         self.peer = peer
-        self.rx = RxCounters()
-        self._decoder = FrameDecoder(codec, self.rx)
-        self.send_timeout_s = send_timeout_s
-        self.eof = False
-        self.error = ""
-        self.tx_frames = 0
-        self.tx_bytes = 0
-        self.tx_dropped = 0
         _tune(sock)
 
     def fileno(self) -> int:
@@ -96,10 +87,7 @@ class HilChannel:
             return 0
         if self.datagram:
             return self._send_udp(frames)
-        data = b"".join(frames)
-        self._send_tcp(data)
-        self.tx_frames += len(frames)
-        self.tx_bytes += len(data)
+        self._send_all(frames, self.sock.send, self.sock, _TCP_TEXTS)
         return 0
 
     def _send_udp(self, frames: list) -> int:
@@ -128,18 +116,11 @@ class HilChannel:
             chunk, size = ([f], len(f)) if f is not None else ([], 0)
         return refused
 
-    def _send_tcp(self, data: bytes) -> None:
-        write_all(self.sock.send, self.sock, data, self.send_timeout_s, self._lost, _TCP_TEXTS)
-
     # -- receive ----------------------------------------------------------------------------
     def receive(self, timeout_s: float = 0.0) -> list:
         """Messages available now, waiting up to timeout_s for the first bytes."""
-        if self.eof:
+        if not self._readable(self.sock, timeout_s):
             return []
-        if timeout_s > 0:
-            r, _, _ = select.select([self.sock], [], [], timeout_s)
-            if not r:
-                return []
         out: list = []
         for _ in range(256):      # bound one call's work; the caller comes back
             try:
@@ -163,10 +144,6 @@ class HilChannel:
                 break
             out += self._decoder.feed(data, self.datagram)
         return out
-
-    def _lost(self, why: str) -> None:
-        self.eof = True
-        self.error = why
 
     def close(self) -> None:
         try:

@@ -175,6 +175,7 @@ class MavlinkDriver(threading.Thread):
         self.took_off = False
         self.sysid = None
         self.rel_alt_m: float | None = None   # GLOBAL_POSITION_INT relative_alt
+        self._next_beat = 0.0                 # wall time of the next GCS heartbeat
         self._halt = threading.Event()
         self._tx_lock = threading.Lock()
 
@@ -234,24 +235,26 @@ class MavlinkDriver(threading.Thread):
         with self._tx_lock:
             self.codec.command_long_send(self.sysid or 1, 1, command, 0, *p)
 
+    def _pump(self) -> None:
+        """A GCS heartbeat every wall second; what SITL sent within 20 ms, handled."""
+        now = time.monotonic()
+        if now >= self._next_beat:
+            with self._tx_lock:
+                self.codec.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+            self._next_beat = now + 1.0
+        r, _, _ = select.select([self.sock], [], [], 0.02)
+        if r:
+            data = self.sock.recv(65536)
+            if not data:
+                raise SitlError("ArduCopter SITL closed its MAVLink connection")
+            for m in self.codec.parse_buffer(data) or []:
+                self._handle(m)
+
     def _loop(self) -> None:
-        next_beat = 0.0
         next_try_sim = None
         streams_asked = False
         while not self._halt.is_set():
-            now = time.monotonic()
-            if now >= next_beat:
-                with self._tx_lock:
-                    self.codec.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID,
-                                              0, 0, 0)
-                next_beat = now + 1.0
-            r, _, _ = select.select([self.sock], [], [], 0.02)
-            if r:
-                data = self.sock.recv(65536)
-                if not data:
-                    raise SitlError("ArduCopter SITL closed its MAVLink connection")
-                for m in self.codec.parse_buffer(data) or []:
-                    self._handle(m)
+            self._pump()
             if self.sysid is None:
                 continue
             if not streams_asked:

@@ -15,7 +15,6 @@ go straight into our FC for Table 1 and the margins (tools/tune/tune_cmds.py).
 from __future__ import annotations
 
 import math
-import select
 import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
@@ -119,20 +118,6 @@ class AutotuneDriver(MavlinkDriver):
                         with self._tx_lock:
                             self.codec.param_request_read_send(self.sysid, 1, name.encode(), -1)
                 self._next_cmd = now + 1.0
-
-    def _pump(self) -> None:
-        now = time.monotonic()
-        if now >= getattr(self, "_beat", 0.0):
-            with self._tx_lock:
-                self.codec.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
-            self._beat = now + 1.0
-        r, _, _ = select.select([self.sock], [], [], 0.02)
-        if r:
-            data = self.sock.recv(65536)
-            if not data:
-                raise SitlError("ArduCopter SITL closed its MAVLink connection")
-            for m in self.codec.parse_buffer(data) or []:
-                self._handle(m)
 
     def _takeoff_pass(self) -> None:
         """GUIDED, arm, take off: what the parent's loop does, one pass at a time."""
