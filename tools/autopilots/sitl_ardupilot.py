@@ -32,15 +32,12 @@ import select
 import signal
 import socket
 import subprocess
-import threading
 import time
-from collections import deque
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.bridge.ardupilot_physics import euler_from_quat
-
-from silbridge.tools.autopilots.ardupilot_log import SOURCE_ATTITUDE_TARGET, SOURCE_NAV_CONTROLLER
+from silbridge.tools.autopilots.ardupilot_log import SOURCE_NAV_CONTROLLER
+from silbridge.tools.autopilots.autopilot_driver import AutopilotDriver
 from silbridge.tools.autopilots.autopilot_run import (
     STOP_GRACE_S,
     Autopilot,
@@ -146,38 +143,22 @@ ARDUCOPTER = Autopilot(
     log_name=SITL_LOG, pick=pick_instance, stop=lambda proc, instance: stop_sitl(proc))
 
 
-class MavlinkDriver(threading.Thread):
+class MavlinkDriver(AutopilotDriver):
     """GCS over SITL's TCP port: GUIDED, arm, take off; reports ArduCopter's target and altitude."""
 
     def __init__(self, instance: int, *, takeoff_alt_m: float, sim_time_s, on_takeoff, target,
                  connect_timeout_s: float = 30.0, on_takeoff_sent=None, target_feed=None,
                  sim_ns=None):
-        super().__init__(daemon=True, name=f"sitl-mavlink-{instance}")
+        super().__init__(f"sitl-mavlink-{instance}", src_system=255, src_component=190,
+                         sim_time_s=sim_time_s, target=target, on_takeoff=on_takeoff,
+                         on_takeoff_sent=on_takeoff_sent, target_feed=target_feed,
+                         sim_ns=sim_ns, connect_timeout_s=connect_timeout_s)
         self.addr = ("127.0.0.1", MAVLINK_TCP_BASE + PORT_STRIDE * instance)
         self.takeoff_alt_m = takeoff_alt_m
-        self.sim_time_s = sim_time_s
-        self.on_takeoff = on_takeoff                 # () on the ACK that accepts the take-off
-        self.on_takeoff_sent = on_takeoff_sent or (lambda: None)   # () before each one is sent
-        self.target = target
-        # Each ATTITUDE_TARGET with its stamp and the physics time it was read, for the
-        # run log's /fc/target (tools/logs/fc_target.py).
-        self.target_feed = target_feed
-        self.sim_ns = sim_ns or (lambda: int(self.sim_time_s() * 1e9))
-        self.connect_timeout_s = connect_timeout_s
-        self.codec = mav.MAVLink(self, srcSystem=255, srcComponent=190)
-        self.codec.robust_parsing = True
-        self.sock: socket.socket | None = None
-        self.statustext: deque = deque(maxlen=20)
-        self.error: str | None = None
-        self.armed = False
         self.mode = None
         self.takeoff_sent = False
-        self.took_off = False
-        self.sysid = None
         self.rel_alt_m: float | None = None   # GLOBAL_POSITION_INT relative_alt
         self._next_beat = 0.0                 # wall time of the next GCS heartbeat
-        self._halt = threading.Event()
-        self._tx_lock = threading.Lock()
 
     # pymavlink "file" interface: the codec writes here (always under _tx_lock)
     def write(self, buf: bytes) -> None:
@@ -186,25 +167,6 @@ class MavlinkDriver(threading.Thread):
 
     def reported_alt_m(self) -> float | None:
         return self.rel_alt_m
-
-    def send_attitude_target(self, time_boot_ms: int, q_wxyz, thrust: float,
-                             type_mask: int) -> bool:
-        """SET_ATTITUDE_TARGET to the vehicle; from any thread. False if the link is not up."""
-        if self.sock is None or self.sysid is None or self.error is not None:
-            return False
-        try:
-            with self._tx_lock:
-                self.codec.set_attitude_target_send(
-                    int(time_boot_ms) & 0xFFFFFFFF, self.sysid, 1, type_mask,
-                    [float(v) for v in q_wxyz], 0.0, 0.0, 0.0, float(thrust))
-        except OSError as e:   # the run stops on driver.error, as for the driver's own sends
-            self.error = f"sending SET_ATTITUDE_TARGET failed: {e.strerror or e}"
-            return False
-        return True
-
-    def stop(self) -> None:
-        self._halt.set()
-        self.join(3.0)
 
     def _connect(self) -> None:
         end = time.monotonic() + self.connect_timeout_s
@@ -229,11 +191,6 @@ class MavlinkDriver(threading.Thread):
         finally:
             if self.sock is not None:
                 self.sock.close()
-
-    def _command(self, command: int, *params) -> None:
-        p = list(params) + [0.0] * (7 - len(params))
-        with self._tx_lock:
-            self.codec.command_long_send(self.sysid or 1, 1, command, 0, *p)
 
     def _pump(self) -> None:
         """A GCS heartbeat every wall second; what SITL sent within 20 ms, handled."""
@@ -289,20 +246,10 @@ class MavlinkDriver(threading.Thread):
             self.sysid = m.get_srcSystem()
             self.armed = bool(m.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED)
             self.mode = m.custom_mode
-        elif kind == "ATTITUDE_TARGET":
-            euler = euler_from_quat(*m.q)
-            self.target.set(*euler, SOURCE_ATTITUDE_TARGET)
-            if self.target_feed is not None:
-                self.target_feed.put(self.sim_ns(), m.time_boot_ms * 1_000_000, *euler)
         elif kind == "GLOBAL_POSITION_INT":
             self.rel_alt_m = m.relative_alt * 1e-3
         elif kind == "NAV_CONTROLLER_OUTPUT":
             self.target.set(math.radians(m.nav_roll), math.radians(m.nav_pitch),
                             math.radians(m.nav_bearing), SOURCE_NAV_CONTROLLER)
-        elif kind == "COMMAND_ACK":
-            if m.command == mav.MAV_CMD_NAV_TAKEOFF and m.result == mav.MAV_RESULT_ACCEPTED \
-                    and not self.took_off:
-                self.took_off = True
-                self.on_takeoff()
-        elif kind == "STATUSTEXT":
-            self.statustext.append(m.text)
+        else:
+            self._report(m, kind)
