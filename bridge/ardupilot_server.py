@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 from .ardupilot_json import ArduPilotProtocolError
 from .runner_errors import BridgeError
+from .serve_loop import ServeResult, ended_by, stop_asked
 
 _NS = 1_000_000_000
 SPIN_US = 0.0   # see JsonPhysicsServer.serve
@@ -30,13 +31,7 @@ class SitlLost(BridgeError):
 
 
 @dataclass
-class JsonRunResult:
-    sim_s: float
-    wall_s: float
-    stats: dict
-    crashed: bool
-    crash_reason: str = ""
-    stopped_by: str = "duration"
+class JsonRunResult(ServeResult):
     notes: list = field(default_factory=list)
 
 
@@ -111,7 +106,7 @@ class JsonPhysicsServer:
                 if select.select([sock], [], [], poll_s)[0]:
                     continue
                 now = time.monotonic()
-                if stop is not None and stop():
+                if stop_asked(stop):
                     stopped_by = "stop"
                     break
                 if last_rx is None and now - t0 > connect_timeout_s:
@@ -129,14 +124,8 @@ class JsonPhysicsServer:
             last_rx = rx_ns * 1e-9
             sock.sendto(phys.handle(data, src, rx_ns), src)
             phys.sent(mono_ns())
-            if phys.sim.crashed:
-                stopped_by = "crash"
+            end = ended_by(phys.sim, stop)
+            if end:
+                stopped_by = end
                 break
-            if stop is not None and stop():
-                stopped_by = "stop"
-                break
-        wall_s = time.monotonic() - t0
-        sim = phys.sim
-        return JsonRunResult(sim_s=sim.sim_ns / _NS, wall_s=wall_s, stats=phys.stats(),
-                             crashed=bool(sim.crashed), crash_reason=sim.crash_reason,
-                             stopped_by=stopped_by)
+        return JsonRunResult.of(phys.sim, t0, phys.stats(), stopped_by)

@@ -32,6 +32,7 @@ from silbridge.mavlink.hil.hil_errors import HilPeerLost
 from silbridge.mavlink.hil.px4_hil import CMD_SET_MESSAGE_INTERVAL
 
 from .runner_errors import PeerLost, StartupCheckFailed
+from .serve_loop import ServeResult, ended_by, stop_asked
 
 _NS = 1_000_000_000
 FREEWHEEL_WALL_S = 0.001
@@ -41,13 +42,7 @@ MSG_COMMAND_LONG = 76
 
 
 @dataclass
-class Px4RunResult:
-    sim_s: float
-    wall_s: float
-    stats: dict
-    crashed: bool
-    crash_reason: str = ""
-    stopped_by: str = "duration"
+class Px4RunResult(ServeResult):
     startup_check: dict = field(default_factory=dict)
 
 
@@ -79,7 +74,7 @@ class Px4HilServer:
         codec = self.physics.encoder.codec
         while self.channel is None:
             self.channel = self.listener.accept(codec, 0.1)
-            if stop is not None and stop():
+            if stop_asked(stop):
                 return
             if self.channel is None and time.monotonic() > end:
                 raise PeerLost(f"PX4 did not connect to {self.address[0]}:{self.address[1]} "
@@ -135,7 +130,7 @@ class Px4HilServer:
                 last_rx = time.monotonic()
                 pending += self._handle(msgs, rx_ns)
             if ch.eof:
-                if stop is not None and stop():
+                if stop_asked(stop):
                     stopped_by = "stop"
                     break
                 raise PeerLost(f"PX4 closed the simulator link at sim time "
@@ -162,20 +157,14 @@ class Px4HilServer:
                 self._send_step(answered=False)
                 next_wall = now + stall_s
             self._startup_check(realtime)
-            if phys.sim.crashed:
-                stopped_by = "crash"
+            end = ended_by(phys.sim, stop)
+            if end:
+                stopped_by = end
                 break
-            if stop is not None and stop():
-                stopped_by = "stop"
-                break
-        wall_s = time.monotonic() - t0
-        sim = phys.sim
         stats = phys.stats()
         if ch is not None:
             stats.update(ch.rx.as_dict(), tx_frames=ch.tx_frames, tx_bytes=ch.tx_bytes)
-        return Px4RunResult(sim_s=sim.sim_ns / _NS, wall_s=wall_s, stats=stats,
-                            crashed=bool(sim.crashed), crash_reason=sim.crash_reason,
-                            stopped_by=stopped_by, startup_check=self.check)
+        return Px4RunResult.of(phys.sim, t0, stats, stopped_by, startup_check=self.check)
 
     def _startup_check(self, realtime: bool) -> None:
         phys = self.physics

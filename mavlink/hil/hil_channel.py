@@ -22,13 +22,18 @@ import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.framing import FrameDecoder, RxCounters
-from silbridge.mavlink.hil.hil_errors import HilConnectError, HilPeerLost
+from silbridge.mavlink.hil.hil_errors import HilConnectError
+from silbridge.mavlink.hil.hil_link import HilLink, WriteTexts
 
 DEFAULT_PORT = 4560
 _DGRAM_BYTES = 32 * 1024
 _SOCK_BUF_BYTES = 4 << 20
 _RECV_BYTES = 1 << 20
+_TCP_TEXTS = WriteTexts(
+    failed="TCP peer lost while sending ({why})",
+    failed_hint="the HIL peer disconnected ({error}); restart it",
+    stalled="the TCP peer read nothing for {timeout_s:g} s",
+    stalled_hint="{error}: it is hung or stopped; the run stops")
 
 
 def parse_addr(text: str | None, default_host: str = "127.0.0.1") -> tuple[str, int]:
@@ -61,23 +66,15 @@ def _tune(sock: socket.socket) -> None:
     sock.setblocking(False)
 
 
-class HilChannel:
+class HilChannel(HilLink):
     """A connected (TCP) or peer-learning (UDP) HIL socket with its codec and counters."""
 
     def __init__(self, sock: socket.socket, datagram: bool, codec, peer=None,
                  send_timeout_s: float = 5.0):
+        super().__init__(codec, send_timeout_s)
         self.sock = sock
         self.datagram = datagram
-        self.codec = codec
         self.peer = peer
-        self.rx = RxCounters()
-        self._decoder = FrameDecoder(codec, self.rx)
-        self.send_timeout_s = send_timeout_s
-        self.eof = False
-        self.error = ""
-        self.tx_frames = 0
-        self.tx_bytes = 0
-        self.tx_dropped = 0
         _tune(sock)
 
     def fileno(self) -> int:
@@ -90,10 +87,7 @@ class HilChannel:
             return 0
         if self.datagram:
             return self._send_udp(frames)
-        data = b"".join(frames)
-        self._send_tcp(data)
-        self.tx_frames += len(frames)
-        self.tx_bytes += len(data)
+        self._send_all(frames, self.sock.send, self.sock, _TCP_TEXTS)
         return 0
 
     def _send_udp(self, frames: list) -> int:
@@ -122,35 +116,11 @@ class HilChannel:
             chunk, size = ([f], len(f)) if f is not None else ([], 0)
         return refused
 
-    def _send_tcp(self, data: bytes) -> None:
-        view = memoryview(data)
-        deadline = None
-        while view:
-            try:
-                n = self.sock.send(view)
-                view = view[n:]
-                continue
-            except (BlockingIOError, InterruptedError):
-                pass
-            except OSError as exc:
-                self._lost(f"TCP peer lost while sending ({exc.strerror or exc})")
-                raise HilPeerLost(f"the HIL peer disconnected ({self.error}); restart it") from None
-            now = time.monotonic()
-            deadline = deadline or now + self.send_timeout_s
-            if now > deadline:
-                self._lost(f"the TCP peer read nothing for {self.send_timeout_s:g} s")
-                raise HilPeerLost(f"{self.error}: it is hung or stopped; the run stops")
-            select.select([], [self.sock], [], 0.01)
-
     # -- receive ----------------------------------------------------------------------------
     def receive(self, timeout_s: float = 0.0) -> list:
         """Messages available now, waiting up to timeout_s for the first bytes."""
-        if self.eof:
+        if not self._readable(self.sock, timeout_s):
             return []
-        if timeout_s > 0:
-            r, _, _ = select.select([self.sock], [], [], timeout_s)
-            if not r:
-                return []
         out: list = []
         for _ in range(256):      # bound one call's work; the caller comes back
             try:
@@ -174,10 +144,6 @@ class HilChannel:
                 break
             out += self._decoder.feed(data, self.datagram)
         return out
-
-    def _lost(self, why: str) -> None:
-        self.eof = True
-        self.error = why
 
     def close(self) -> None:
         try:

@@ -17,15 +17,18 @@ from __future__ import annotations
 
 import errno
 import os
-import select
 import termios
-import time
 
-from silbridge.mavlink.framing import FrameDecoder, RxCounters
-from silbridge.mavlink.hil.hil_errors import HilConnectError, HilPeerLost
+from silbridge.mavlink.hil.hil_errors import HilConnectError
+from silbridge.mavlink.hil.hil_link import HilLink, WriteTexts
 
 DEFAULT_BAUD = 921600
 _RECV_BYTES = 1 << 16
+_SERIAL_TEXTS = WriteTexts(
+    failed="writing to the serial line failed ({why})",
+    failed_hint="the HIL peer is gone ({error})",
+    stalled="the serial line took nothing for {timeout_s:g} s",
+    stalled_hint="{error}: the board stopped reading; the run stops")
 
 
 def is_serial(addr: str | None) -> bool:
@@ -52,11 +55,12 @@ def _speed(baud: int) -> int:
     return const
 
 
-class SerialChannel:
+class SerialChannel(HilLink):
     datagram = False
     peer = None
 
     def __init__(self, path: str, baud: int, codec, send_timeout_s: float = 5.0):
+        super().__init__(codec, send_timeout_s)
         self.name = f"serial:{path}:{baud}"
         try:
             self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
@@ -78,15 +82,6 @@ class SerialChannel:
         except (termios.error, HilConnectError) as e:
             os.close(self.fd)
             raise HilConnectError(f"cannot configure serial port {path}: {e}") from None
-        self.codec = codec
-        self.rx = RxCounters()
-        self._decoder = FrameDecoder(codec, self.rx)
-        self.send_timeout_s = send_timeout_s
-        self.eof = False
-        self.error = ""
-        self.tx_frames = 0
-        self.tx_bytes = 0
-        self.tx_dropped = 0
 
     def fileno(self) -> int:
         return self.fd
@@ -94,36 +89,12 @@ class SerialChannel:
     def send(self, frames: list) -> int:
         if not frames or self.eof:
             return 0
-        data = memoryview(b"".join(frames))
-        n_bytes = len(data)
-        deadline = None
-        while data:
-            try:
-                n = os.write(self.fd, data)
-                data = data[n:]
-                continue
-            except (BlockingIOError, InterruptedError):
-                pass
-            except OSError as e:
-                self._lost(f"writing to the serial line failed ({e.strerror or e})")
-                raise HilPeerLost(f"the HIL peer is gone ({self.error})") from None
-            now = time.monotonic()
-            deadline = deadline or now + self.send_timeout_s
-            if now > deadline:
-                self._lost(f"the serial line took nothing for {self.send_timeout_s:g} s")
-                raise HilPeerLost(f"{self.error}: the board stopped reading; the run stops")
-            select.select([], [self.fd], [], 0.01)
-        self.tx_frames += len(frames)
-        self.tx_bytes += n_bytes
+        self._send_all(frames, lambda view: os.write(self.fd, view), self.fd, _SERIAL_TEXTS)
         return 0
 
     def receive(self, timeout_s: float = 0.0) -> list:
-        if self.eof:
+        if not self._readable(self.fd, timeout_s):
             return []
-        if timeout_s > 0:
-            r, _, _ = select.select([self.fd], [], [], timeout_s)
-            if not r:
-                return []
         out: list = []
         for _ in range(64):
             try:
@@ -139,10 +110,6 @@ class SerialChannel:
                 break
             out += self._decoder.feed(data, False)
         return out
-
-    def _lost(self, why: str) -> None:
-        self.eof = True
-        self.error = why
 
     def close(self) -> None:
         if self.fd >= 0:

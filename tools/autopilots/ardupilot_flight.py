@@ -15,37 +15,31 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
-import tempfile
-import time
 
 from silbridge.bridge.ardupilot_json import sitl_port
 from silbridge.bridge.ardupilot_physics import ArduPilotPhysics
 from silbridge.bridge.ardupilot_server import JsonPhysicsServer, parse_address
-from silbridge.bridge.scenario import load_scenario
-from silbridge.bridge.simulator import Simulator
 
 from silbridge.tools.autopilots.ardupilot_log import ArduPilotLogSink, AttitudeTarget
 from silbridge.tools.autopilots.ardupilot_setpoints import SetpointForwarder
+from silbridge.tools.autopilots.autopilot_run import (
+    AutopilotRun,
+    flight_summary,
+    flight_metadata,
+    run_summary,
+    scenario_factory,
+)
 from silbridge.tools.logs.fc_target import TargetFeed
 from silbridge.tools.autopilots.sitl_ardupilot import (
+    ARDUCOPTER,
     MavlinkDriver,
-    SitlError,
-    pick_instance,
     sitl_defaults,
-    sitl_log_tail,
     start_sitl,
-    stop_sitl,
     write_defaults,
 )
 
 _NS = 1_000_000_000
 BOOT_BUDGET_S = 120.0   # sim seconds SITL may take from boot to an accepted take-off
-
-
-def _factory(scenario: str, seed, imu_hz):
-    sc = load_scenario(scenario, seed=seed)
-    return sc, (lambda: Simulator(sc, imu_hz=imu_hz))
 
 
 class BenchStepHooks:
@@ -87,17 +81,10 @@ class BenchStepHooks:
         log.step(recs, pwm, sim)
 
 
-def _summary(sc, sim, res, **extra) -> dict:
-    return {"fc": "ardupilot", "scenario": sc.name, "seed": sc.seed, "sim_s": res.sim_s,
-            "wall_s": res.wall_s, "realtime_factor": res.sim_s / max(res.wall_s, 1e-9),
-            "crashed": res.crashed, "crash_reason": res.crash_reason,
-            "stopped_by": res.stopped_by, "json_link": res.stats, "imu_hz": sim.imu_hz, **extra}
-
-
 def serve_bridge(scenario: str, *, seed=None, imu_hz=None, duration_s=None,
                  sitl_address: str | None = None, out=print) -> dict:
     """Answer one SITL's servo packets until the scenario's duration of sim time."""
-    sc, make_sim = _factory(scenario, seed, imu_hz)
+    sc, make_sim = scenario_factory(scenario, seed, imu_hz)
     phys = ArduPilotPhysics(make_sim, note=lambda t: out(f"bridge: {t}"))
     address = parse_address(sitl_address, sitl_port(0))
     with JsonPhysicsServer(phys, address) as server:
@@ -108,98 +95,64 @@ def serve_bridge(scenario: str, *, seed=None, imu_hz=None, duration_s=None,
             f"`arducopter --model JSON:{host}{inst}` with SIM_RATE_HZ {phys.physics_hz:g}, "
             "FRAME_CLASS 1, FRAME_TYPE 1")
         res = server.serve(duration_s if duration_s is not None else sc.duration_s)
-    return _summary(sc, phys.sim, res)
+    return run_summary("ardupilot", sc, res, link={"json_link": res.stats},
+                       imu_hz=phys.sim.imu_hz)
 
 
 def fly_ardupilot(*, scenario: str, seed, duration_s: float, log_path: str, binary: str,
                   imu_hz=None, params: dict | None = None, speedup: float = 50.0,
                   boot_budget_s: float = BOOT_BUDGET_S, keep_dir: bool = False) -> dict:
     """One ArduCopter run: boot, arm, take off, hold for duration_s; log from take-off."""
-    sc, make_sim = _factory(scenario, seed, imu_hz)
+    sc, make_sim = scenario_factory(scenario, seed, imu_hz)
     target = AttitudeTarget()
     feed = TargetFeed()
-    workdir = tempfile.mkdtemp(prefix="silbridge-sitl-")
-    instance = pick_instance()
-    notes = []
-    phys = ArduPilotPhysics(make_sim, note=notes.append)
-    sim = phys.sim
-    defaults = sitl_defaults(sim, phys.physics_hz, params)
-    defaults_path = os.path.join(workdir, "silbridge-defaults.parm")
-    write_defaults(defaults_path, defaults)
-    meta = _metadata(sc, sim, phys.physics_hz, duration_s, defaults, binary, speedup)
-    driver = MavlinkDriver(instance, takeoff_alt_m=sc.takeoff_alt_m,
-                           sim_time_s=lambda: phys.sim.sim_ns / _NS,
-                           on_takeoff=lambda: hooks.takeoff_accepted(), target=target,
-                           on_takeoff_sent=lambda: hooks.takeoff_sent(phys.sim.sim_ns),
-                           target_feed=feed, sim_ns=lambda: phys.sim.sim_ns)
-    forwarder = SetpointForwarder(sc, sim.dt_ns, math.radians(sc.home.heading_deg),
-                                  send=driver.send_attitude_target,
-                                  reported_alt_m=driver.reported_alt_m)
-    sink = ArduPilotLogSink(log_path, metadata=meta, target=target, duration_s=duration_s,
-                            command=forwarder, target_feed=feed)
-    hooks = phys.sink = BenchStepHooks(forwarder, sink)
-    server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(instance)))
-    proc = None
-    t0 = time.monotonic()
+    run = AutopilotRun(ARDUCOPTER, "silbridge-sitl-", keep_dir=keep_dir)
+    driver = server = sink = None
     try:
-        proc = start_sitl(binary, instance, workdir, speedup=speedup, home=sc.home,
-                          defaults_path=defaults_path)
+        notes = []
+        phys = ArduPilotPhysics(make_sim, note=notes.append)
+        sim = phys.sim
+        defaults = sitl_defaults(sim, phys.physics_hz, params)
+        defaults_path = os.path.join(run.workdir, "silbridge-defaults.parm")
+        write_defaults(defaults_path, defaults)
+        driver = MavlinkDriver(run.instance, takeoff_alt_m=sc.takeoff_alt_m,
+                               sim_time_s=lambda: phys.sim.sim_ns / _NS,
+                               on_takeoff=lambda: hooks.takeoff_accepted(), target=target,
+                               on_takeoff_sent=lambda: hooks.takeoff_sent(phys.sim.sim_ns),
+                               target_feed=feed, sim_ns=lambda: phys.sim.sim_ns)
+        forwarder = SetpointForwarder(sc, sim.dt_ns, math.radians(sc.home.heading_deg),
+                                      send=driver.send_attitude_target,
+                                      reported_alt_m=driver.reported_alt_m)
+        sink = ArduPilotLogSink(log_path, target=target, duration_s=duration_s,
+                                command=forwarder, target_feed=feed,
+                                metadata=_metadata(sc, phys, duration_s, defaults, binary,
+                                                   speedup))
+        hooks = phys.sink = BenchStepHooks(forwarder, sink)
+        server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(run.instance)))
+        run.launch(start_sitl, binary, run.instance, run.workdir, speedup=speedup,
+                   home=sc.home, defaults_path=defaults_path)
         driver.start()
-
-        def stop() -> bool:
-            return sink.done or proc.poll() is not None or driver.error is not None
-
-        res = server.serve(boot_budget_s + duration_s, stop=stop, connect_timeout_s=60.0)
-        _raise_if_failed(sink, proc, driver, workdir, boot_budget_s)
+        res = server.serve(boot_budget_s + duration_s,
+                           stop=run.stop_when(lambda: sink.done, driver), connect_timeout_s=60.0)
+        run.raise_if_failed(sink, driver, boot_budget_s, mode=f"{driver.mode}")
     finally:
-        if driver.is_alive():
-            driver.stop()
-        if proc is not None:
-            stop_sitl(proc)
-        server.close()
-        sink.close(fc="ardupilot", takeoff_physics_ns=sink.t0_ns, notes=notes,
-                   **forwarder.summary())
-        if not keep_dir:
-            shutil.rmtree(workdir, ignore_errors=True)
-    flight_s = (sink.last_sim_ns - sink.t0_ns) / _NS
-    return _summary(sc, phys.sim, res, flight_sim_s=flight_s, sim_s_total=res.sim_s,
-                    takeoff_physics_s=sink.t0_ns / _NS, log=log_path,
-                    wall_total_s=time.monotonic() - t0,
-                    **forwarder.summary()) | {"sim_s": flight_s}
+        run.close(driver, server)
+        if sink is not None:
+            sink.close(fc="ardupilot", takeoff_physics_ns=sink.t0_ns, notes=notes,
+                       **forwarder.summary())
+    return flight_summary("ardupilot", sc, res, run, sink, log_path,
+                          link={"json_link": res.stats}, imu_hz=sim.imu_hz,
+                          **forwarder.summary())
 
 
-def _raise_if_failed(sink, proc, driver, workdir, boot_budget_s) -> None:
-    said = "; ArduCopter said: " + " | ".join(driver.statustext) if driver.statustext else ""
-    if driver.error is not None:
-        raise SitlError(f"MAVLink to ArduCopter SITL failed: {driver.error}{said}")
-    if sink.t0_ns is None:
-        if proc.poll() is not None:
-            raise SitlError(f"ArduCopter SITL exited with status {proc.returncode} before "
-                            f"take-off; its output: {sitl_log_tail(workdir)}")
-        raise SitlError(f"ArduCopter did not take off within {boot_budget_s:g} s of sim time "
-                        f"(armed={driver.armed}, mode={driver.mode}){said}")
-    if not sink.done and proc.poll() is not None:
-        raise SitlError(f"ArduCopter SITL exited with status {proc.returncode} in flight; its "
-                        f"output: {sitl_log_tail(workdir)}")
-
-
-def _metadata(sc, sim, physics_hz, duration_s, defaults, binary, speedup) -> dict:
-    from silbridge.tools.loop.flight import _version
-    return {
-        "config": {
-            "imu_hz": sim.imu_hz, "pwm_hz": physics_hz, "physics_hz": physics_hz,
-            "baro_hz": sc.baro_hz, "mag_hz": sc.mag_hz, "gnss_hz": sc.gnss_hz,
-            "duration_s": duration_s, "seed": sc.seed, "transport": "ardupilot-json",
-            "processes": 2, "mode": "lockstep", "features_off": [], "fc": "ardupilot",
-            "sitl_speedup": speedup,
-            # What the channels mean in this log (tools/autopilots/ardupilot_log.py, docs/logs.md).
-            "att_target": "scenario command sent to ArduCopter (SET_ATTITUDE_TARGET)",
-            "command": "/setpoint: the command forwarded, on the log clock",
-            "fc_target": "/fc/target: ArduCopter's ATTITUDE_TARGET, stamped time_boot_ms",
-            "timing": "JSON link, bridge side: imu_wall_ns = servo packet arrival, "
-                      "consume_wall_ns = physics step done, pwm_wall_ns = reply sent",
-        },
-        "scenario": sc.to_dict(),
-        "params": dict(defaults),
-        "software": {"silbridge": _version(), "arducopter": binary},
-    }
+def _metadata(sc, phys, duration_s, defaults, binary, speedup) -> dict:
+    return flight_metadata(
+        sc, phys.sim, fc="ardupilot", physics_hz=phys.physics_hz, duration_s=duration_s,
+        transport="ardupilot-json", mode="lockstep", params=defaults,
+        software={"arducopter": binary}, sitl_speedup=speedup,
+        # What the channels mean in this log (tools/autopilots/ardupilot_log.py, docs/logs.md).
+        att_target="scenario command sent to ArduCopter (SET_ATTITUDE_TARGET)",
+        command="/setpoint: the command forwarded, on the log clock",
+        fc_target="/fc/target: ArduCopter's ATTITUDE_TARGET, stamped time_boot_ms",
+        timing="JSON link, bridge side: imu_wall_ns = servo packet arrival, "
+               "consume_wall_ns = physics step done, pwm_wall_ns = reply sent")

@@ -51,15 +51,15 @@ from silbridge.bridge.ardupilot_server import JsonPhysicsServer
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 
+from silbridge.tools.autopilots.autopilot_run import AutopilotRun
 from silbridge.tools.autopilots.sitl_ardupilot import (
+    ARDUCOPTER,
     MAVLINK_TCP_BASE,
     PORT_STRIDE,
     SitlError,
     find_arducopter,
-    pick_instance,
     sitl_defaults,
     start_sitl,
-    stop_sitl,
     write_defaults,
 )
 
@@ -147,33 +147,31 @@ def _factor(samples, skip_s: float, span_s: float) -> float:
     return (s1 - s0) / max(w1 - w0, 1e-9)
 
 
-def _workdir_and_defaults(sim, physics_hz: float):
-    workdir = tempfile.mkdtemp(prefix="silbridge-speed-")
-    path = os.path.join(workdir, "silbridge-defaults.parm")
+def _run_with_defaults(sim, physics_hz: float) -> tuple[AutopilotRun, str]:
+    """A fresh SITL run and its defaults file for our vehicle."""
+    run = AutopilotRun(ARDUCOPTER, "silbridge-speed-")
+    path = os.path.join(run.workdir, "silbridge-defaults.parm")
     write_defaults(path, sitl_defaults(sim, physics_hz))
-    return workdir, path
+    return run, path
 
 
 def measure_reference(binary: str, *, skip_s: float, span_s: float) -> dict:
     sc = load_scenario("S1")
     sim = Simulator(sc)
-    workdir, defaults = _workdir_and_defaults(sim, _NS / sim.dt_ns)
-    inst = pick_instance()
-    proc = start_sitl(binary, inst, workdir, speedup=1000, home=sc.home, defaults_path=defaults,
-                      model="quad")
-    reader = ClockReader(inst)
-    reader.start()
+    run, defaults = _run_with_defaults(sim, _NS / sim.dt_ns)
+    reader = ClockReader(run.instance)
     try:
+        run.launch(start_sitl, binary, run.instance, run.workdir, speedup=1000, home=sc.home,
+                   defaults_path=defaults, model="quad")
+        reader.start()
         deadline = time.monotonic() + 120.0
         while math.isnan(_factor(reader.samples, skip_s, span_s)) and \
                 time.monotonic() < deadline:
-            if proc.poll() is not None or reader.error:
-                raise SitlError(f"reference SITL stopped: {reader.error or proc.returncode}")
+            if run.exited() or reader.error:
+                raise SitlError(f"reference SITL stopped: {reader.error or run.proc.returncode}")
             time.sleep(0.2)
     finally:
-        reader.stop()
-        stop_sitl(proc)
-        shutil.rmtree(workdir, ignore_errors=True)
+        run.close(reader)
     return {"realtime_factor": _factor(reader.samples, skip_s, span_s), "model": "quad",
             "speedup": 1000}
 
@@ -208,25 +206,30 @@ def _profile(rows, skip_s: float, span_s: float) -> dict:
             "sitl_us": {"median": float(np.median(sitl)), "mean": float(sitl.mean())}}
 
 
+def _serve_json(binary: str, sc, phys, defaults_sim, physics_hz: float, duration_s: float,
+                spin_us: float | None = None) -> None:
+    """SITL at --speedup 1000 on phys over JSON for duration_s of sim time (its defaults
+    from defaults_sim at physics_hz)."""
+    run, defaults = _run_with_defaults(defaults_sim, physics_hz)
+    reader = ClockReader(run.instance)
+    server = None
+    try:
+        server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(run.instance)))
+        run.launch(start_sitl, binary, run.instance, run.workdir, speedup=1000, home=sc.home,
+                   defaults_path=defaults)
+        reader.start()
+        server.serve(duration_s, connect_timeout_s=60.0, spin_us=spin_us,
+                     stop=run.stop_when(lambda: False, reader))
+    finally:
+        run.close(reader, server)
+
+
 def measure_json_idle(binary: str, *, skip_s: float, span_s: float,
                       spin_us: float | None = None) -> dict:
     sc = load_scenario("S1")
     phys = ArduPilotPhysics(lambda: Simulator(sc))
     prof = phys.sink = _Profile(phys)
-    workdir, defaults = _workdir_and_defaults(phys.sim, phys.physics_hz)
-    inst = pick_instance()
-    server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(inst)))
-    proc = start_sitl(binary, inst, workdir, speedup=1000, home=sc.home, defaults_path=defaults)
-    reader = ClockReader(inst)
-    reader.start()
-    try:
-        server.serve(skip_s + span_s, connect_timeout_s=60.0, spin_us=spin_us,
-                     stop=lambda: proc.poll() is not None or reader.error is not None)
-    finally:
-        reader.stop()
-        stop_sitl(proc)
-        server.close()
-        shutil.rmtree(workdir, ignore_errors=True)
+    _serve_json(binary, sc, phys, phys.sim, phys.physics_hz, skip_s + span_s, spin_us)
     return _profile(prof.rows, skip_s, span_s) | {"model": "JSON", "speedup": 1000,
                                                    "spin_us": spin_us}
 
@@ -264,20 +267,7 @@ class _NoPhysics:
 def measure_json_floor(binary: str, *, skip_s: float, span_s: float) -> dict:
     sc = load_scenario("S1")
     phys = _NoPhysics()
-    workdir, defaults = _workdir_and_defaults(Simulator(sc), 1000.0)
-    inst = pick_instance()
-    server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(inst)))
-    proc = start_sitl(binary, inst, workdir, speedup=1000, home=sc.home, defaults_path=defaults)
-    reader = ClockReader(inst)
-    reader.start()
-    try:
-        server.serve(skip_s + span_s, connect_timeout_s=60.0,
-                     stop=lambda: proc.poll() is not None or reader.error is not None)
-    finally:
-        reader.stop()
-        stop_sitl(proc)
-        server.close()
-        shutil.rmtree(workdir, ignore_errors=True)
+    _serve_json(binary, sc, phys, Simulator(sc), 1000.0, skip_s + span_s)
     return _profile(phys.rows, skip_s, span_s) | {"model": "JSON, no physics"}
 
 

@@ -20,15 +20,11 @@ from __future__ import annotations
 import math
 import select
 import socket
-import threading
 import time
-from collections import deque
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.bridge.ardupilot_physics import euler_from_quat
-
-from silbridge.tools.autopilots.ardupilot_log import SOURCE_ATTITUDE_TARGET
+from silbridge.tools.autopilots.autopilot_driver import AutopilotDriver
 from silbridge.tools.autopilots.sitl_px4 import OFFBOARD_LOCAL_BASE, OFFBOARD_REMOTE_BASE, Px4Error
 
 STREAM_HZ = 50.0
@@ -38,10 +34,13 @@ MAIN_MODE_AUTO, MAIN_MODE_OFFBOARD = 4, 6
 SUB_MODE_TAKEOFF = 2
 
 
-class Px4Driver(threading.Thread):
+class Px4Driver(AutopilotDriver):
     def __init__(self, instance: int, *, sim_time_s, target, on_takeoff, on_takeoff_sent=None,
                  connect_timeout_s: float = 60.0, target_feed=None, sim_ns=None):
-        super().__init__(daemon=True, name=f"px4-mavlink-{instance}")
+        super().__init__(f"px4-mavlink-{instance}", src_system=254, src_component=191,
+                         sim_time_s=sim_time_s, target=target, on_takeoff=on_takeoff,
+                         on_takeoff_sent=on_takeoff_sent, target_feed=target_feed,
+                         sim_ns=sim_ns, connect_timeout_s=connect_timeout_s)
         self.peer = ("127.0.0.1", OFFBOARD_LOCAL_BASE + instance)
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
@@ -50,29 +49,10 @@ class Px4Driver(threading.Thread):
             self.sock.close()
             raise Px4Error(f"cannot bind PX4's offboard port {OFFBOARD_REMOTE_BASE + instance} "
                            f"({e.strerror}): another program uses PX4 instance {instance}") from None
-        self.sim_time_s = sim_time_s
-        self.target = target
-        # Each ATTITUDE_TARGET with PX4's stamp and the physics time it was read: the FC-target
-        # channel /fc/target that scores every FC against its own target (tools/logs/fc_target.py).
-        self.target_feed = target_feed
-        self.sim_ns = sim_ns or (lambda: int(self.sim_time_s() * 1e9))
-        self.on_takeoff = on_takeoff
-        self.on_takeoff_sent = on_takeoff_sent or (lambda: None)
-        self.connect_timeout_s = connect_timeout_s
-        self.codec = mav.MAVLink(self, srcSystem=254, srcComponent=191)
-        self.codec.robust_parsing = True
-        self.statustext: deque = deque(maxlen=20)
-        self.error: str | None = None
-        self.sysid: int | None = None
-        self.armed = False
         self.main_mode = self.sub_mode = None
-        self.took_off = False
         self.offboard_wanted = False
         self.alt_m: float | None = None        # LOCAL_POSITION_NED -z
         self.climb_m_s: float | None = None    # LOCAL_POSITION_NED -vz
-        self.setpoints_sent = 0
-        self._halt = threading.Event()
-        self._tx_lock = threading.Lock()
 
     # pymavlink "file" interface (always under _tx_lock)
     def write(self, buf: bytes) -> None:
@@ -85,26 +65,6 @@ class Px4Driver(threading.Thread):
     def want_offboard(self) -> None:
         self.offboard_wanted = True
 
-    def send_attitude_target(self, time_boot_ms: int, q_wxyz, thrust: float,
-                             type_mask: int) -> bool:
-        """SET_ATTITUDE_TARGET to PX4, from any thread. False if PX4 has not been heard yet."""
-        if self.sysid is None or self.error is not None:
-            return False
-        try:
-            with self._tx_lock:
-                self.codec.set_attitude_target_send(
-                    int(time_boot_ms) & 0xFFFFFFFF, self.sysid, 1, type_mask,
-                    [float(v) for v in q_wxyz], 0.0, 0.0, 0.0, float(thrust))
-        except OSError as e:
-            self.error = f"sending SET_ATTITUDE_TARGET failed: {e.strerror or e}"
-            return False
-        self.setpoints_sent += 1
-        return True
-
-    def stop(self) -> None:
-        self._halt.set()
-        self.join(3.0)
-
     def run(self) -> None:
         try:
             self._loop()
@@ -112,11 +72,6 @@ class Px4Driver(threading.Thread):
             self.error = str(e) or type(e).__name__
         finally:
             self.sock.close()
-
-    def _command(self, command: int, *params) -> None:
-        p = list(params) + [0.0] * (7 - len(params))
-        with self._tx_lock:
-            self.codec.command_long_send(self.sysid, 1, command, 0, *p)
 
     def _loop(self) -> None:
         t0 = time.monotonic()
@@ -170,17 +125,7 @@ class Px4Driver(threading.Thread):
             self.armed = bool(m.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED)
             self.main_mode = (m.custom_mode >> 16) & 0xFF
             self.sub_mode = (m.custom_mode >> 24) & 0xFF
-        elif kind == "ATTITUDE_TARGET":
-            euler = euler_from_quat(*m.q)
-            self.target.set(*euler, SOURCE_ATTITUDE_TARGET)
-            if self.target_feed is not None:
-                self.target_feed.put(self.sim_ns(), m.time_boot_ms * 1_000_000, *euler)
         elif kind == "LOCAL_POSITION_NED":
             self.alt_m, self.climb_m_s = -m.z, -m.vz
-        elif kind == "COMMAND_ACK":
-            if m.command == mav.MAV_CMD_NAV_TAKEOFF and m.result == mav.MAV_RESULT_ACCEPTED \
-                    and not self.took_off:
-                self.took_off = True
-                self.on_takeoff()
-        elif kind == "STATUSTEXT":
-            self.statustext.append(m.text)
+        else:
+            self._report(m, kind)

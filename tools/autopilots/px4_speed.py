@@ -19,10 +19,8 @@ from __future__ import annotations
 import argparse
 import json
 import select
-import shutil
 import socket
 import sys
-import tempfile
 import threading
 import time
 
@@ -35,6 +33,7 @@ from silbridge.bridge.simulator import Simulator
 from silbridge.mavlink.hil.hil_channel import make_codec
 
 from silbridge.tools.autopilots import sitl_px4 as sp
+from silbridge.tools.autopilots.autopilot_run import AutopilotRun
 
 SIH_AIRFRAME = 10040
 
@@ -71,6 +70,10 @@ class ClockProbe(threading.Thread):
                     self.samples.append((now, m.time_boot_ms / 1000.0))
         self.sock.close()
 
+    def stop(self) -> None:
+        self.halt.set()
+        self.join(2.0)
+
     def speed(self, warmup_s: float, window_s: float) -> float | None:
         s = self.samples
         if not s:
@@ -88,10 +91,13 @@ class ClockProbe(threading.Thread):
 
 def measure(binary: str, etc: str, *, ours: bool, warmup_s: float, window_s: float,
             sih_factor: float) -> dict:
-    n = sp.pick_instance()
-    work = tempfile.mkdtemp(prefix="silbridge-px4-speed-")
-    probe = ClockProbe(n)
-    proc = None
+    run = AutopilotRun(sp.PX4, "silbridge-px4-speed-")
+    n, work = run.instance, run.workdir
+    try:
+        probe = ClockProbe(n)
+    except BaseException:
+        run.close()
+        raise
     server = None
     try:
         probe.start()
@@ -100,30 +106,22 @@ def measure(binary: str, etc: str, *, ours: bool, warmup_s: float, window_s: flo
             sc = load_scenario("S1")
             phys = Px4Physics(lambda: Simulator(sc), make_codec(1, 51))
             server = Px4HilServer(phys, ("127.0.0.1", sp.SIM_TCP_BASE + n))
-            proc = sp.start_px4(binary, etc, n, work, params=sp.px4_params(phys.sim, sc))
-            server.serve(1e6, stop=lambda: probe.done(warmup_s, window_s) or
-                         proc.poll() is not None, connect_timeout_s=30.0)
+            run.launch(sp.start_px4, binary, etc, n, work, params=sp.px4_params(phys.sim, sc))
+            server.serve(1e6, stop=run.stop_when(lambda: probe.done(warmup_s, window_s)),
+                         connect_timeout_s=30.0)
         else:
-            proc = sp.start_px4(binary, etc, n, work, params={}, speed_factor=sih_factor,
-                                autostart=SIH_AIRFRAME)
+            run.launch(sp.start_px4, binary, etc, n, work, params={}, speed_factor=sih_factor,
+                       autostart=SIH_AIRFRAME)
             end = time.monotonic() + budget
             while not probe.done(warmup_s, window_s) and time.monotonic() < end \
-                    and proc.poll() is None:
+                    and not run.exited():
                 time.sleep(0.1)
     finally:
-        probe.halt.set()
-        probe.join(2.0)
-        if proc is not None:
-            sp.stop_px4(proc, n)
-        if server is not None:
-            server.close()
-        sp.release_instance(n)
-        tail = sp.log_tail(work)
-        shutil.rmtree(work, ignore_errors=True)
+        run.close(probe, server)
     speed = probe.speed(warmup_s, window_s)
     if speed is None:
         raise sp.Px4Error(f"no clock from PX4 ({'ours' if ours else 'SIH'}) on its offboard "
-                          f"link; its output: {tail}")
+                          f"link; its output: {run.tail}")
     return {"sim_s_per_wall_s": speed, "samples": len(probe.samples)}
 
 

@@ -29,18 +29,23 @@ from __future__ import annotations
 import math
 import os
 import select
-import shutil
+import signal
 import socket
 import subprocess
-import threading
 import time
-from collections import deque
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.bridge.ardupilot_physics import euler_from_quat
-
-from silbridge.tools.autopilots.ardupilot_log import SOURCE_ATTITUDE_TARGET, SOURCE_NAV_CONTROLLER
+from silbridge.tools.autopilots.ardupilot_log import SOURCE_NAV_CONTROLLER
+from silbridge.tools.autopilots.autopilot_driver import AutopilotDriver
+from silbridge.tools.autopilots.autopilot_run import (
+    STOP_GRACE_S,
+    Autopilot,
+    find_binary,
+    log_tail,
+    port_free,
+    stop_process,
+)
 
 ENV_BINARY = "SILBRIDGE_ARDUCOPTER"
 MAVLINK_TCP_BASE = 5760
@@ -50,6 +55,7 @@ COPTER_MODE_GUIDED = 4
 RETRY_SIM_S = 2.0           # between arming attempts, in sim time (what SITL's checks see)
 STREAM_HZ = 50.0
 POSITION_STREAM_HZ = 10.0   # GLOBAL_POSITION_INT: the altitude the setpoint forwarder reads
+SITL_LOG = "sitl.log"       # SITL's console output, in its working directory
 
 HOW_TO_GET = (
     "no ArduCopter SITL binary: give --sitl PATH, set SILBRIDGE_ARDUCOPTER, or put "
@@ -65,25 +71,7 @@ class SitlError(Exception):
 
 def find_arducopter(explicit: str | None = None) -> str | None:
     """The arducopter binary to use, or None: --sitl, then $SILBRIDGE_ARDUCOPTER, then PATH."""
-    for cand in (explicit, os.environ.get(ENV_BINARY)):
-        if cand:
-            if os.path.isfile(cand) and os.access(cand, os.X_OK):
-                return os.path.abspath(cand)
-            raise SitlError(f"ArduCopter SITL binary {cand!r} does not exist or is not "
-                            "executable: build it with `./waf copter` in an ArduPilot checkout "
-                            "(build/sitl/bin/arducopter)")
-    return shutil.which("arducopter")
-
-
-def _port_free(kind: int, port: int) -> bool:
-    s = socket.socket(socket.AF_INET, kind)
-    try:
-        s.bind(("127.0.0.1", port))
-        return True
-    except OSError:
-        return False
-    finally:
-        s.close()
+    return find_binary(ARDUCOPTER, explicit)
 
 
 def pick_instance(start: int | None = None, tries: int = 200) -> int:
@@ -92,8 +80,8 @@ def pick_instance(start: int | None = None, tries: int = 200) -> int:
     for i in range(tries):
         n = (first + i) % 500 + 1
         tcp = [MAVLINK_TCP_BASE + PORT_STRIDE * n + k for k in (0, 2, 3)]
-        if all(_port_free(socket.SOCK_STREAM, p) for p in tcp) and \
-                _port_free(socket.SOCK_DGRAM, JSON_UDP_BASE + PORT_STRIDE * n):
+        if all(port_free(socket.SOCK_STREAM, p) for p in tcp) and \
+                port_free(socket.SOCK_DGRAM, JSON_UDP_BASE + PORT_STRIDE * n):
             return n
     raise SitlError("no free SITL instance (ports 5760+10N, 9002+10N) in 200 tries: stop "
                     "stale arducopter processes")
@@ -132,7 +120,7 @@ def start_sitl(binary: str, instance: int, workdir: str, *, speedup: float, home
     home_arg = f"{home.lat_deg},{home.lon_deg},{home.alt_m},{home.heading_deg}"
     cmd = [binary, "--model", model, "--speedup", f"{speedup:g}",
            "--instance", str(instance), "--defaults", defaults_path, "--home", home_arg, "-w"]
-    log = open(os.path.join(workdir, "sitl.log"), "w")
+    log = open(os.path.join(workdir, SITL_LOG), "w")
     try:
         return subprocess.Popen(cmd, cwd=workdir, stdout=log, stderr=subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL)
@@ -140,55 +128,37 @@ def start_sitl(binary: str, instance: int, workdir: str, *, speedup: float, home
         log.close()
 
 
-def stop_sitl(proc: subprocess.Popen, timeout_s: float = 3.0) -> None:
-    if proc.poll() is None:
-        proc.terminate()
-        try:
-            proc.wait(timeout_s)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+def stop_sitl(proc: subprocess.Popen, timeout_s: float = STOP_GRACE_S) -> None:
+    """SIGTERM, then SIGKILL after timeout_s."""
+    stop_process(proc, signal.SIGTERM, timeout_s)
 
 
 def sitl_log_tail(workdir: str, lines: int = 8) -> str:
-    try:
-        with open(os.path.join(workdir, "sitl.log"), errors="replace") as fh:
-            return " | ".join(fh.read().strip().splitlines()[-lines:])
-    except OSError:
-        return ""
+    return log_tail(os.path.join(workdir, SITL_LOG), lines)
 
 
-class MavlinkDriver(threading.Thread):
+ARDUCOPTER = Autopilot(
+    name="ArduCopter", error=SitlError, env=ENV_BINARY, command="arducopter",
+    build_hint="`./waf copter` in an ArduPilot checkout (build/sitl/bin/arducopter)",
+    log_name=SITL_LOG, pick=pick_instance, stop=lambda proc, instance: stop_sitl(proc))
+
+
+class MavlinkDriver(AutopilotDriver):
     """GCS over SITL's TCP port: GUIDED, arm, take off; reports ArduCopter's target and altitude."""
 
     def __init__(self, instance: int, *, takeoff_alt_m: float, sim_time_s, on_takeoff, target,
                  connect_timeout_s: float = 30.0, on_takeoff_sent=None, target_feed=None,
                  sim_ns=None):
-        super().__init__(daemon=True, name=f"sitl-mavlink-{instance}")
+        super().__init__(f"sitl-mavlink-{instance}", src_system=255, src_component=190,
+                         sim_time_s=sim_time_s, target=target, on_takeoff=on_takeoff,
+                         on_takeoff_sent=on_takeoff_sent, target_feed=target_feed,
+                         sim_ns=sim_ns, connect_timeout_s=connect_timeout_s)
         self.addr = ("127.0.0.1", MAVLINK_TCP_BASE + PORT_STRIDE * instance)
         self.takeoff_alt_m = takeoff_alt_m
-        self.sim_time_s = sim_time_s
-        self.on_takeoff = on_takeoff                 # () on the ACK that accepts the take-off
-        self.on_takeoff_sent = on_takeoff_sent or (lambda: None)   # () before each one is sent
-        self.target = target
-        # Each ATTITUDE_TARGET with its stamp and the physics time it was read, for the
-        # run log's /fc/target (tools/logs/fc_target.py).
-        self.target_feed = target_feed
-        self.sim_ns = sim_ns or (lambda: int(self.sim_time_s() * 1e9))
-        self.connect_timeout_s = connect_timeout_s
-        self.codec = mav.MAVLink(self, srcSystem=255, srcComponent=190)
-        self.codec.robust_parsing = True
-        self.sock: socket.socket | None = None
-        self.statustext: deque = deque(maxlen=20)
-        self.error: str | None = None
-        self.armed = False
         self.mode = None
         self.takeoff_sent = False
-        self.took_off = False
-        self.sysid = None
         self.rel_alt_m: float | None = None   # GLOBAL_POSITION_INT relative_alt
-        self._halt = threading.Event()
-        self._tx_lock = threading.Lock()
+        self._next_beat = 0.0                 # wall time of the next GCS heartbeat
 
     # pymavlink "file" interface: the codec writes here (always under _tx_lock)
     def write(self, buf: bytes) -> None:
@@ -197,25 +167,6 @@ class MavlinkDriver(threading.Thread):
 
     def reported_alt_m(self) -> float | None:
         return self.rel_alt_m
-
-    def send_attitude_target(self, time_boot_ms: int, q_wxyz, thrust: float,
-                             type_mask: int) -> bool:
-        """SET_ATTITUDE_TARGET to the vehicle; from any thread. False if the link is not up."""
-        if self.sock is None or self.sysid is None or self.error is not None:
-            return False
-        try:
-            with self._tx_lock:
-                self.codec.set_attitude_target_send(
-                    int(time_boot_ms) & 0xFFFFFFFF, self.sysid, 1, type_mask,
-                    [float(v) for v in q_wxyz], 0.0, 0.0, 0.0, float(thrust))
-        except OSError as e:   # the run stops on driver.error, as for the driver's own sends
-            self.error = f"sending SET_ATTITUDE_TARGET failed: {e.strerror or e}"
-            return False
-        return True
-
-    def stop(self) -> None:
-        self._halt.set()
-        self.join(3.0)
 
     def _connect(self) -> None:
         end = time.monotonic() + self.connect_timeout_s
@@ -241,29 +192,26 @@ class MavlinkDriver(threading.Thread):
             if self.sock is not None:
                 self.sock.close()
 
-    def _command(self, command: int, *params) -> None:
-        p = list(params) + [0.0] * (7 - len(params))
-        with self._tx_lock:
-            self.codec.command_long_send(self.sysid or 1, 1, command, 0, *p)
+    def _pump(self) -> None:
+        """A GCS heartbeat every wall second; what SITL sent within 20 ms, handled."""
+        now = time.monotonic()
+        if now >= self._next_beat:
+            with self._tx_lock:
+                self.codec.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+            self._next_beat = now + 1.0
+        r, _, _ = select.select([self.sock], [], [], 0.02)
+        if r:
+            data = self.sock.recv(65536)
+            if not data:
+                raise SitlError("ArduCopter SITL closed its MAVLink connection")
+            for m in self.codec.parse_buffer(data) or []:
+                self._handle(m)
 
     def _loop(self) -> None:
-        next_beat = 0.0
         next_try_sim = None
         streams_asked = False
         while not self._halt.is_set():
-            now = time.monotonic()
-            if now >= next_beat:
-                with self._tx_lock:
-                    self.codec.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID,
-                                              0, 0, 0)
-                next_beat = now + 1.0
-            r, _, _ = select.select([self.sock], [], [], 0.02)
-            if r:
-                data = self.sock.recv(65536)
-                if not data:
-                    raise SitlError("ArduCopter SITL closed its MAVLink connection")
-                for m in self.codec.parse_buffer(data) or []:
-                    self._handle(m)
+            self._pump()
             if self.sysid is None:
                 continue
             if not streams_asked:
@@ -298,20 +246,10 @@ class MavlinkDriver(threading.Thread):
             self.sysid = m.get_srcSystem()
             self.armed = bool(m.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED)
             self.mode = m.custom_mode
-        elif kind == "ATTITUDE_TARGET":
-            euler = euler_from_quat(*m.q)
-            self.target.set(*euler, SOURCE_ATTITUDE_TARGET)
-            if self.target_feed is not None:
-                self.target_feed.put(self.sim_ns(), m.time_boot_ms * 1_000_000, *euler)
         elif kind == "GLOBAL_POSITION_INT":
             self.rel_alt_m = m.relative_alt * 1e-3
         elif kind == "NAV_CONTROLLER_OUTPUT":
             self.target.set(math.radians(m.nav_roll), math.radians(m.nav_pitch),
                             math.radians(m.nav_bearing), SOURCE_NAV_CONTROLLER)
-        elif kind == "COMMAND_ACK":
-            if m.command == mav.MAV_CMD_NAV_TAKEOFF and m.result == mav.MAV_RESULT_ACCEPTED \
-                    and not self.took_off:
-                self.took_off = True
-                self.on_takeoff()
-        elif kind == "STATUSTEXT":
-            self.statustext.append(m.text)
+        else:
+            self._report(m, kind)

@@ -21,10 +21,18 @@ from __future__ import annotations
 
 import fcntl
 import os
-import shutil
 import signal
 import socket
 import subprocess
+
+from silbridge.tools.autopilots.autopilot_run import (
+    STOP_GRACE_S,
+    Autopilot,
+    find_binary,
+    port_free,
+    stop_process,
+)
+from silbridge.tools.autopilots.autopilot_run import log_tail as _log_tail
 
 ENV_BINARY = "SILBRIDGE_PX4"
 AIRFRAME = 10016                 # none_iris: a quad X driven by simulator_mavlink on 4560 + N
@@ -34,6 +42,7 @@ OFFBOARD_REMOTE_BASE = 14540     # ... and sends here: our driver binds it
 GCS_LOCAL_BASE = 18570
 ROTOR_XY_M = 0.1591             # |x| = |y| of each rotor hub (jsbsim_models/quadx/quadx.xml)
 MAX_INSTANCE = 9                 # above 9 PX4 sends every offboard link to 14549
+PX4_LOG = "px4.log"              # PX4's console output, in its working directory
 
 HOW_TO_GET = (
     "no PX4 SITL binary: give --px4 PATH, set SILBRIDGE_PX4, or put `px4` on PATH. Build it "
@@ -49,13 +58,7 @@ class Px4Error(Exception):
 
 def find_px4(explicit: str | None = None) -> tuple[str, str] | None:
     """(px4 binary, its etc/ folder) or None: --px4, then $SILBRIDGE_PX4, then PATH."""
-    cands = [c for c in (explicit, os.environ.get(ENV_BINARY)) if c]
-    for cand in cands:
-        if not (os.path.isfile(cand) and os.access(cand, os.X_OK)):
-            raise Px4Error(f"PX4 SITL binary {cand!r} does not exist or is not executable: "
-                           "build it with `make px4_sitl_default` (build/px4_sitl_default/bin/px4)")
-        return os.path.abspath(cand), _etc_for(os.path.abspath(cand))
-    found = shutil.which("px4")
+    found = find_binary(PX4, explicit)
     return (found, _etc_for(found)) if found else None
 
 
@@ -65,17 +68,6 @@ def _etc_for(binary: str) -> str:
         raise Px4Error(f"no PX4 startup scripts at {etc}/init.d-posix/rcS: keep bin/ and etc/ "
                        "of the PX4 build together (build/px4_sitl_default/{bin,etc})")
     return etc
-
-
-def _port_free(kind: int, port: int) -> bool:
-    s = socket.socket(socket.AF_INET, kind)
-    try:
-        s.bind(("127.0.0.1", port))
-        return True
-    except OSError:
-        return False
-    finally:
-        s.close()
 
 
 def _lock_free(n: int) -> bool:
@@ -109,8 +101,8 @@ def _remove(path: str) -> None:
 def instance_free(n: int) -> bool:
     udp = (OFFBOARD_LOCAL_BASE + n, OFFBOARD_REMOTE_BASE + n, GCS_LOCAL_BASE + n,
            14280 + n, 13030 + n)
-    return (_port_free(socket.SOCK_STREAM, SIM_TCP_BASE + n)
-            and all(_port_free(socket.SOCK_DGRAM, p) for p in udp) and _lock_free(n))
+    return (port_free(socket.SOCK_STREAM, SIM_TCP_BASE + n)
+            and all(port_free(socket.SOCK_DGRAM, p) for p in udp) and _lock_free(n))
 
 
 _claims: dict[int, int] = {}
@@ -221,7 +213,7 @@ def start_px4(binary: str, etc: str, instance: int, workdir: str, *, params: dic
     if speed_factor is not None:
         env["PX4_SIM_SPEED_FACTOR"] = f"{speed_factor:g}"
     env.update(extra_env or {})
-    log = open(os.path.join(workdir, "px4.log"), "w")
+    log = open(os.path.join(workdir, PX4_LOG), "w")
     try:
         # Its own session: a Ctrl-C reaches us, and we stop PX4 in order (stop_px4). If we
         # die without that, the kernel kills it (PR_SET_PDEATHSIG): no orphan PX4 holding
@@ -261,22 +253,19 @@ def _die_with_parent() -> None:
         pass
 
 
-def stop_px4(proc: subprocess.Popen, instance: int | None = None, grace_s: float = 3.0) -> None:
+def stop_px4(proc: subprocess.Popen, instance: int | None = None,
+             grace_s: float = STOP_GRACE_S) -> None:
     """SIGINT (PX4 shuts down its modules), then SIGKILL; its lock and socket are released."""
-    if proc.poll() is None:
-        try:
-            proc.send_signal(signal.SIGINT)
-            proc.wait(grace_s)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+    stop_process(proc, signal.SIGINT, grace_s)
     if instance is not None:
         _lock_free(instance)
 
 
 def log_tail(workdir: str, lines: int = 8) -> str:
-    try:
-        with open(os.path.join(workdir, "px4.log"), errors="replace") as fh:
-            return " | ".join(fh.read().strip().splitlines()[-lines:])
-    except OSError:
-        return ""
+    return _log_tail(os.path.join(workdir, PX4_LOG), lines)
+
+
+PX4 = Autopilot(
+    name="PX4", error=Px4Error, env=ENV_BINARY, command="px4",
+    build_hint="`make px4_sitl_default` (build/px4_sitl_default/bin/px4)",
+    log_name=PX4_LOG, pick=pick_instance, stop=stop_px4, release=release_instance)

@@ -15,9 +15,6 @@ go straight into our FC for Table 1 and the margins (tools/tune/tune_cmds.py).
 from __future__ import annotations
 
 import math
-import select
-import shutil
-import tempfile
 import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
@@ -26,16 +23,14 @@ from silbridge.bridge.ardupilot_json import sitl_port
 from silbridge.bridge.ardupilot_physics import ArduPilotPhysics
 from silbridge.bridge.ardupilot_server import JsonPhysicsServer
 
-from silbridge.tools.autopilots.ardupilot_flight import _factory
 from silbridge.tools.autopilots.ardupilot_log import AttitudeTarget
+from silbridge.tools.autopilots.autopilot_run import AutopilotRun, scenario_factory
 from silbridge.tools.autopilots.sitl_ardupilot import (
+    ARDUCOPTER,
     MavlinkDriver,
     SitlError,
-    pick_instance,
     sitl_defaults,
-    sitl_log_tail,
     start_sitl,
-    stop_sitl,
     write_defaults,
 )
 
@@ -124,20 +119,6 @@ class AutotuneDriver(MavlinkDriver):
                             self.codec.param_request_read_send(self.sysid, 1, name.encode(), -1)
                 self._next_cmd = now + 1.0
 
-    def _pump(self) -> None:
-        now = time.monotonic()
-        if now >= getattr(self, "_beat", 0.0):
-            with self._tx_lock:
-                self.codec.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
-            self._beat = now + 1.0
-        r, _, _ = select.select([self.sock], [], [], 0.02)
-        if r:
-            data = self.sock.recv(65536)
-            if not data:
-                raise SitlError("ArduCopter SITL closed its MAVLink connection")
-            for m in self.codec.parse_buffer(data) or []:
-                self._handle(m)
-
     def _takeoff_pass(self) -> None:
         """GUIDED, arm, take off: what the parent's loop does, one pass at a time."""
         self._pump()
@@ -165,42 +146,33 @@ def run_autotune(binary: str, *, axes_mask: int = 3, aggr: float = 0.1, scenario
                  seed: int = 1, speedup: float = 50.0, budget_sim_s: float = 1500.0,
                  keep_dir: bool = False) -> dict:
     """Fly ArduCopter's AUTOTUNE on our physics; returns its saved gains and timings."""
-    sc, make_sim = _factory(scenario, seed, None)
-    workdir = tempfile.mkdtemp(prefix="silbridge-autotune-")
-    instance = pick_instance()
+    sc, make_sim = scenario_factory(scenario, seed, None)
+    run = AutopilotRun(ARDUCOPTER, "silbridge-autotune-", keep_dir=keep_dir)
     phys = ArduPilotPhysics(make_sim)
     defaults = sitl_defaults(phys.sim, phys.physics_hz,
                              {"AUTOTUNE_AXES": axes_mask, "AUTOTUNE_AGGR": aggr})
-    path = f"{workdir}/silbridge-defaults.parm"
+    path = f"{run.workdir}/silbridge-defaults.parm"
     write_defaults(path, defaults)
-    driver = AutotuneDriver(instance, takeoff_alt_m=sc.takeoff_alt_m,
+    driver = AutotuneDriver(run.instance, takeoff_alt_m=sc.takeoff_alt_m,
                             sim_time_s=lambda: phys.sim.sim_ns / 1e9)
-    server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(instance)))
-    proc = None
-    t0 = time.monotonic()
+    server = JsonPhysicsServer(phys, ("127.0.0.1", sitl_port(run.instance)))
     try:
-        proc = start_sitl(binary, instance, workdir, speedup=speedup, home=sc.home,
-                          defaults_path=path)
+        run.launch(start_sitl, binary, run.instance, run.workdir, speedup=speedup,
+                   home=sc.home, defaults_path=path)
         driver.start()
-        server.serve(budget_sim_s, stop=lambda: driver.done or proc.poll() is not None
-                     or driver.error is not None, connect_timeout_s=60.0)
+        server.serve(budget_sim_s, stop=run.stop_when(lambda: driver.done, driver),
+                     connect_timeout_s=60.0)
         if driver.error:
             raise SitlError(f"{driver.error}; ArduCopter said: {' | '.join(driver.statustext)}")
         if not driver.done:
             raise SitlError(f"AUTOTUNE did not finish within {budget_sim_s:g} s of sim time "
                             f"(phase {driver.phase}, mode {driver.mode}); ArduCopter said: "
-                            f"{' | '.join(driver.statustext)}; log: {sitl_log_tail(workdir)}")
+                            f"{' | '.join(driver.statustext)}; log: {run.log_tail()}")
     finally:
-        if driver.is_alive():
-            driver.stop()
-        if proc is not None:
-            stop_sitl(proc)
-        server.close()
-        if not keep_dir:
-            shutil.rmtree(workdir, ignore_errors=True)
+        run.close(driver, server)
     return {"gains": driver.gains, "tune_sim_s": (driver.tune_done_s or 0) -
             (driver.tune_started_s or 0), "sim_s": phys.sim.sim_ns / 1e9,
-            "wall_s": time.monotonic() - t0, "statustext": list(driver.statustext),
+            "wall_s": time.monotonic() - run.t0, "statustext": list(driver.statustext),
             "events": driver.events}
 
 
