@@ -208,6 +208,7 @@ class Geofence:
         if not self.enabled(v):
             return True
         t, c = self.cfg.types, self.cfg
+        alt_m -= v.home_up_m            # the fence's altitudes are above home
         if t & ALT_MAX and alt_m > c.alt_max:
             return False
         if t & ALT_MIN and alt_m < c.alt_min:
@@ -246,13 +247,14 @@ class Geofence:
             return
         before = self.breaches
         new = 0
+        above_home_m = v.alt_m - v.home_up_m
         if c.types & ALT_MAX:
-            new |= self._limit(ALT_MAX, v.alt_m, c.alt_max, True)
+            new |= self._limit(ALT_MAX, above_home_m, c.alt_max, True)
         else:
             self.breaches &= ~ALT_MAX
         floor_on = not (c.auto_enable == 2 and v.landing)
         if c.types & ALT_MIN and floor_on:
-            new |= self._limit(ALT_MIN, v.alt_m, c.alt_min, False)
+            new |= self._limit(ALT_MIN, above_home_m, c.alt_min, False)
         else:
             self.breaches &= ~ALT_MIN
         have_pos = v.home_set and v.position_ok()

@@ -99,8 +99,8 @@ class MissionExecutor:
 
     def _alt_m(self, it, v) -> float:
         if it.frame in REL_FRAMES:
-            return float(it.z)
-        return float(it.z) - v.home_alt_msl_m
+            return v.alt_from_home(float(it.z))
+        return v.alt_from_msl(float(it.z))
 
     def _dest_ne(self, it, v):
         if it.x == 0 and it.y == 0:

@@ -246,17 +246,18 @@ class RtlSequence:
         target = v.rally.rtl_destination(v)
         self.dest_ne = target.ne
         self.rally_index = target.rally_index
-        self.return_alt_m = max(v.alt_m + cfg.rtl_climb_min_m, cfg.rtl_alt_m)
+        # RTL_ALT, RTL_ALT_FINAL and the fence's altitudes are above home
+        self.return_alt_m = max(v.alt_m + cfg.rtl_climb_min_m, v.alt_from_home(cfg.rtl_alt_m))
         if target.alt_m is not None:
             self.return_alt_m = max(self.return_alt_m, target.alt_m)
         safe_max = v.fence.safe_alt_max(v)
         if safe_max is not None:      # ArduCopter: RTL stays below an enabled max-alt fence
-            self.return_alt_m = min(self.return_alt_m, safe_max)
+            self.return_alt_m = min(self.return_alt_m, v.alt_from_home(safe_max))
         home_dist = math.hypot(v.est.pos_ne_m[0] - self.dest_ne[0],
                                v.est.pos_ne_m[1] - self.dest_ne[1])
         if home_dist < cfg.wp.radius_m:
             # already over home: ArduCopter does not climb then
-            self.return_alt_m = max(v.alt_m, cfg.rtl_alt_final_m, 0.0)
+            self.return_alt_m = max(v.alt_m, v.alt_from_home(max(cfg.rtl_alt_final_m, 0.0)))
         self.phase = "climb"
         self.loiter_until_ns = None
         self.done = False
@@ -279,7 +280,7 @@ class RtlSequence:
             v.hold_position(dt_s, self.dest_ne, (0.0, 0.0), cfg.wp.speed_m_s)
             if v.sim_ns >= self.loiter_until_ns:
                 if cfg.rtl_alt_final_m > 0.0:
-                    v.start_track(self.dest_ne, cfg.rtl_alt_final_m, None)
+                    v.start_track(self.dest_ne, v.alt_from_home(cfg.rtl_alt_final_m), None)
                     self.phase = "final"
                 else:
                     self.phase = "land"
@@ -287,7 +288,7 @@ class RtlSequence:
             if v.fly_track(dt_s):
                 self.phase = "hover"
         elif self.phase == "hover":
-            v.command_vertical(dt_s, cfg.rtl_alt_final_m)
+            v.command_vertical(dt_s, v.alt_from_home(cfg.rtl_alt_final_m))
             v.hold_position(dt_s, self.dest_ne, (0.0, 0.0), cfg.wp.speed_m_s)
             self.done = True
         elif self.phase == "land":

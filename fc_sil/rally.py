@@ -62,7 +62,7 @@ class RallyPoints:
                 continue
             d = math.hypot(ne[0] - pos[0], ne[1] - pos[1])
             if d < best_d:
-                alt = p.alt_m if p.relative else p.alt_m - v.home_alt_msl_m
+                alt = v.alt_from_home(p.alt_m) if p.relative else v.alt_from_msl(p.alt_m)
                 best, best_d = RtlTarget(ne, alt, i), d
         if best is None:
             return home

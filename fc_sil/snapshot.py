@@ -96,7 +96,7 @@ def _ekf_fields(v) -> dict:
     alt_err = 0.0
     g = v.gnss
     if g is not None and g["fix_type"] >= 3 and v.home_set:
-        alt_err = abs(g["alt_mm"] * 1e-3 - (v.home_alt_msl_m + v.alt_m))
+        alt_err = abs(g["alt_mm"] * 1e-3 - (v.alt_datum_msl_m + v.alt_m))
     est = v.est
     return dict(ekf_flags=flags, ekf_vel_var=est.innov_vel_m_s / _GATE_VEL_M_S,
                 ekf_pos_h_var=est.innov_pos_m / _GATE_POS_M, ekf_pos_v_var=alt_err / _GATE_ALT_M)
@@ -141,8 +141,10 @@ def build_snapshot(v) -> VehicleSnapshot:
     present, enabled, health = _sensor_bits(v) if st is not None else (0, 0, SensorBit.GEOFENCE)
     est = v.est
     lat_e7, lon_e7 = est.latlon_e7()
-    alt_msl_m = v.home_alt_msl_m + v.alt_m
-    origin_up = v.home_alt_msl_m - est.origin.alt_msl_m if est.origin is not None else 0.0
+    alt_msl_m = v.alt_datum_msl_m + v.alt_m
+    # the vertical channel's zero and home above the estimator origin (NED z = -up)
+    datum_up = v.alt_datum_msl_m - est.origin.alt_msl_m if est.origin is not None else 0.0
+    home_up = datum_up + v.home_up_m
     vn, ve = est.vel_ne_m_s
     vd = -v.climb_m_s
     g = v.gnss
@@ -178,11 +180,11 @@ def build_snapshot(v) -> VehicleSnapshot:
         rollspeed_rad_s=float(rates[0]), pitchspeed_rad_s=float(rates[1]),
         yawspeed_rad_s=float(rates[2]), q_wxyz=v.q_wxyz,
         lat_e7=lat_e7, lon_e7=lon_e7, alt_msl_mm=int(alt_msl_m * 1000.0),
-        alt_rel_mm=int(v.alt_m * 1000.0), vel_ned_m_s=(vn, ve, vd),
-        pos_ned_m=(est.pos_ne_m[0], est.pos_ne_m[1], -(v.alt_m + origin_up)),
+        alt_rel_mm=int((v.alt_m - v.home_up_m) * 1000.0), vel_ned_m_s=(vn, ve, vd),
+        pos_ned_m=(est.pos_ne_m[0], est.pos_ne_m[1], -(v.alt_m + datum_up)),
         home_set=v.home_set, home_lat_e7=v.home_lat_e7, home_lon_e7=v.home_lon_e7,
         home_alt_msl_mm=int(v.home_alt_msl_m * 1000.0), home_epoch=v.home_epoch,
-        home_ned_m=(v.home_ne[0], v.home_ne[1], -origin_up),
+        home_ned_m=(v.home_ne[0], v.home_ne[1], -home_up),
         battery_voltage_v=b.voltage_v, battery_current_a=b.current_a,
         battery_remaining_pct=b.remaining_pct, battery_consumed_mah=b.consumed_mah,
         servo_us=servo, rc_channels_us=tuple(ch),

@@ -114,6 +114,11 @@ class Vehicle(NavHelpers, GcsCommands):
         self.home_ne = (0.0, 0.0)
         self.home_lat_e7 = self.home_lon_e7 = 0
         self.home_alt_msl_m = 0.0
+        # The vertical channel's zero (alt_m = 0) is the arming point; its height above sea
+        # level is the datum. Home is there too unless a GCS moved it (DO_SET_HOME), which
+        # also locks it: then it neither follows the vehicle nor moves at arming.
+        self.alt_datum_msl_m = 0.0
+        self.home_locked = False
         self._gnss_alt_filt = None
         self.takeoff_in_progress = False
         self.landing = False
@@ -256,14 +261,37 @@ class Vehicle(NavHelpers, GcsCommands):
 
     def _set_home(self, announce: bool = False) -> None:
         """Home follows the vehicle while disarmed; like ArduCopter, a GCS is told (HOME_POSITION
-        unasked) only when home is first set and when arming fixes it."""
+        unasked) only when home is first set and when arming fixes it. A home a GCS set stays."""
+        if self._gnss_alt_filt is not None:
+            self.alt_datum_msl_m = self._gnss_alt_filt
+        if self.home_locked:
+            return
         if announce or not self.home_set:
             self.home_epoch += 1
         self.home_ne = (self.est.pos_ne_m[0], self.est.pos_ne_m[1])
         self.home_lat_e7, self.home_lon_e7 = self.est.latlon_e7()
-        if self._gnss_alt_filt is not None:
-            self.home_alt_msl_m = self._gnss_alt_filt
+        self.home_alt_msl_m = self.alt_datum_msl_m
         self.home_set = True
+
+    def move_home(self, lat_e7: int, lon_e7: int, alt_msl_m: float) -> None:
+        """A GCS's home (DO_SET_HOME): announced at once, kept until the next one."""
+        self.home_ne = self.est.origin.to_ne(lat_e7, lon_e7)
+        self.home_lat_e7, self.home_lon_e7 = int(lat_e7), int(lon_e7)
+        self.home_alt_msl_m = float(alt_msl_m)
+        self.home_set = self.home_locked = True
+        self.home_epoch += 1
+
+    @property
+    def home_up_m(self) -> float:
+        """Home's altitude in the vertical channel's frame (0 unless a GCS moved home)."""
+        return self.home_alt_msl_m - self.alt_datum_msl_m if self.home_set else 0.0
+
+    def alt_from_msl(self, alt_msl_m: float) -> float:
+        return alt_msl_m - self.alt_datum_msl_m
+
+    def alt_from_home(self, alt_rel_m: float) -> float:
+        """An altitude above home (RTL_ALT, relative frames, the fence) in the vertical frame."""
+        return alt_rel_m + self.home_up_m
 
     def position_ok(self) -> bool:
         g = self.gnss

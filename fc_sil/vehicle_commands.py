@@ -76,7 +76,9 @@ class GcsCommands:
             return FAILED, "Takeoff: already flying"
         if not self.position_ok():
             return FAILED, "Takeoff: need a position estimate (GPS)"
-        self.mode.start_takeoff(self, max(float(alt_m), self.cfg.takeoff_min_m))
+        # above home, as ArduCopter reads it (home is the take-off point unless a GCS moved it)
+        self.mode.start_takeoff(self, self.alt_from_home(max(float(alt_m),
+                                                             self.cfg.takeoff_min_m)))
         self._landed_since_ns = None
         return ACCEPTED, None
 
@@ -106,9 +108,9 @@ class GcsCommands:
             if reason:
                 return FAILED, reason
         ne = self.est.origin.to_ne(lat_e7, lon_e7)
-        alt = alt_m if frame in (mav.MAV_FRAME_GLOBAL_RELATIVE_ALT,
-                                 mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT) \
-            else alt_m - self.home_alt_msl_m
+        alt = self.alt_from_home(alt_m) if frame in (mav.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+                                                     mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT) \
+            else self.alt_from_msl(alt_m)
         speed = speed_m_s if math.isfinite(speed_m_s) and speed_m_s > 0 else None
         if self._outside_fence(ne, alt):
             return FAILED, "Reposition: destination outside fence"
@@ -117,6 +119,17 @@ class GcsCommands:
             self.yaw_target_rad = math.radians(yaw_deg)
         else:
             self.face_track(rtl=False)
+        return ACCEPTED, None
+
+    def set_home(self, lat_e7, lon_e7, alt_m, relative):
+        if self.est.origin is None or not self.est.valid:
+            return FAILED, "Set home: no position estimate"
+        if lat_e7 is None:              # here, at the vehicle's altitude
+            lat_e7, lon_e7 = self.est.latlon_e7()
+            alt_msl = self.alt_datum_msl_m + self.alt_m
+        else:
+            alt_msl = self.home_alt_msl_m + alt_m if relative else alt_m
+        self.move_home(lat_e7, lon_e7, alt_msl)
         return ACCEPTED, None
 
     def change_speed(self, speed_m_s: float, speed_type: int):
@@ -174,10 +187,10 @@ class GcsCommands:
                               mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
                               mav.MAV_FRAME_GLOBAL_TERRAIN_ALT,
                               mav.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT)
-            alt = t.z if rel else t.z - self.home_alt_msl_m
+            alt = self.alt_from_home(t.z) if rel else self.alt_from_msl(t.z)
         elif t.frame == mav.MAV_FRAME_LOCAL_NED:
             ne = (t.x, t.y)
-            alt = -t.z - (self.home_alt_msl_m - self.est.origin.alt_msl_m)
+            alt = self.alt_from_msl(self.est.origin.alt_msl_m - t.z)
         else:
             dx, dy = t.x, t.y
             if t.frame in (mav.MAV_FRAME_BODY_NED, mav.MAV_FRAME_BODY_OFFSET_NED):

@@ -112,6 +112,8 @@ class CommandPlanner:
             if not math.isfinite(req.p2):
                 return Immediate(mav.MAV_RESULT_DENIED, "Change speed: param2 must be a number")
             return Call("change_speed", (float(req.p2), _int_or(req.p1, 1)))
+        if c == mav.MAV_CMD_DO_SET_HOME:
+            return self._set_home(req)
         if c == mav.MAV_CMD_DO_SET_MISSION_CURRENT:
             seq = _int_or(req.p1, -1)
             if not 0 < seq < self.srv.mission_count():
@@ -130,6 +132,32 @@ class CommandPlanner:
         if c == mav.MAV_CMD_PREFLIGHT_STORAGE:
             return self.srv.storage(_int_or(req.p1, -1))
         return Immediate(mav.MAV_RESULT_UNSUPPORTED)
+
+    @staticmethod
+    def _set_home(req: CommandRequest) -> Immediate | Call:
+        """As ArduCopter 4.6 answers it (checked against the real one): param1 = 1, or latitude
+        and longitude both 0, is "here"; otherwise the given point becomes home, anywhere, armed
+        or not, and stays (it no longer follows the vehicle, nor moves at arming). COMMAND_LONG's
+        altitude is above sea level; COMMAND_INT's follows its frame (relative = above the
+        current home)."""
+        if req.p1 == 1.0 or (req.x == 0 and req.y == 0):
+            return Call("set_home", (None, None, 0.0, False))
+        if not (math.isfinite(req.x) and math.isfinite(req.y) and math.isfinite(req.z)):
+            return Immediate(mav.MAV_RESULT_DENIED, "Set home: latitude, longitude and "
+                                                    "altitude (param5..7) must be numbers")
+        if req.frame not in REPOSITION_FRAMES:
+            return Immediate(mav.MAV_RESULT_DENIED, f"Set home: frame {req.frame} not "
+                                                    f"supported, use GLOBAL(_RELATIVE_ALT)_INT")
+        if req.is_int:
+            lat_e7, lon_e7 = int(req.x), int(req.y)
+        else:
+            lat_e7, lon_e7 = int(round(req.x * 1e7)), int(round(req.y * 1e7))
+        if not (-900_000_000 <= lat_e7 <= 900_000_000
+                and -1_800_000_000 <= lon_e7 <= 1_800_000_000):
+            return Immediate(mav.MAV_RESULT_FAILED, "Set home: latitude/longitude out of range")
+        relative = req.frame in (mav.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+                                 mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)
+        return Call("set_home", (lat_e7, lon_e7, float(req.z), relative))
 
     @staticmethod
     def _reposition(req: CommandRequest) -> Immediate | Call:

@@ -30,8 +30,14 @@ class Vehicle(SimpleNamespace):
                      alt_m=10.0, home_set=True, home_ne=(0.0, 0.0), home_alt_msl_m=584.0,
                      sim_ns=10**9, mode=SimpleNamespace(number=CopterMode.GUIDED),
                      est=SimpleNamespace(origin=ORIGIN, pos_ne_m=[0.0, 0.0]),
-                     texts=[], modes=[], disarmed=False)
+                     texts=[], modes=[], disarmed=False, home_up_m=0.0)
         super().__init__(**{**state, **kw})
+
+    def alt_from_home(self, alt_rel_m):
+        return alt_rel_m + self.home_up_m
+
+    def alt_from_msl(self, alt_msl_m):
+        return alt_msl_m - (self.home_alt_msl_m - self.home_up_m)
 
     def position_ok(self):
         return True
@@ -85,6 +91,19 @@ def test_alt_max_breach_rtl_backup_fence_and_recovery():
     f.check(v)
     assert f.breaches == 0 and v.texts[-1] == "Fence breach cleared"
     assert f.breach_type == mav.FENCE_BREACH_NONE
+
+
+def test_altitude_fences_are_above_a_home_a_gcs_moved():
+    """DO_SET_HOME 12 m above the take-off point: FENCE_ALT_MAX and the destinations GUIDED
+    accepts count from the new home, not from where the vehicle armed."""
+    f, v = fence(FENCE_TYPE=1, FENCE_ALT_MAX=30.0), Vehicle(home_up_m=12.0)
+    v.alt_m = 40.0                               # 28 m above home
+    f.check(v)
+    assert f.breaches == 0 and f.destination_ok(v, (0.0, 0.0), 41.0)
+    assert not f.destination_ok(v, (0.0, 0.0), 43.0)
+    v.alt_m = 42.5
+    f.check(v)
+    assert v.texts == ["Max Alt fence breached"]
 
 
 def test_actions_landed_disarm_give_up_and_report_only():

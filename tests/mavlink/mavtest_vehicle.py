@@ -181,6 +181,10 @@ class KinematicVehicle:
         self._record("change_speed", speed_m_s, speed_type)
         return mav.MAV_RESULT_ACCEPTED, None
 
+    def set_home(self, lat_e7, lon_e7, alt_m, relative):
+        self._record("set_home", lat_e7, lon_e7, alt_m, relative)
+        return mav.MAV_RESULT_ACCEPTED, None
+
     def mission_set_current(self, seq):
         self._record("mission_set_current", seq)
         self.mission_seq = seq
