@@ -28,8 +28,8 @@
  * noise-free velocity (a simulation without noise) the manoeuvres' own
  * residual errors (latency, heading) are of this size and are no fault. */
 #define FC_AID_FLOOR_RAD 0.006f
-/* Back to the quiet gains once the bias is learned: the boosted PI (KP 1.2,
- * KI 0.8 at the default factor 4) settles in about 3 s. */
+/* Back to the quiet gains once the bias is learned: the boosted PI (KP 0.9,
+ * KI 0.45 at the default factor 3) settles in about 3 s. */
 #define FC_AID_RELEASE_S 3.0f
 
 float fc_sched_weight(float w, float demand, float release_s, float dt_s)
