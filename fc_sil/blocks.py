@@ -113,12 +113,15 @@ class Mahony:
                  still_acc_g: float = _default("SB_STILL_ACC"),
                  trust_ema: bool = True, bias: bool = True,
                  kp_gnss: float = _default("SB_AHRS_GPS_KP"),
-                 ki_gnss: float = _default("SB_AHRS_GPS_KI")):
+                 ki_gnss: float = _default("SB_AHRS_GPS_KI"),
+                 gnss_boost: float = _default("SB_AHRS_GPS_BST"),
+                 gnss_innov_sigma: float = _default("SB_AHRS_GPS_INN")):
         self._s = _state("mahony")
         config = dict(kp=kp, ki=ki, kmag=kmag, trust_tc_s=trust_tc_s, trust_span_g=trust_span_g,
                       bias_rate_hz=bias_rate_hz, still_gyro_rad_s=still_gyro_rad_s,
                       still_acc_g=still_acc_g, trust_ema_enable=trust_ema, bias_enable=bias,
-                      kp_gnss=kp_gnss, ki_gnss=ki_gnss)
+                      kp_gnss=kp_gnss, ki_gnss=ki_gnss, gnss_boost=gnss_boost,
+                      gnss_innov_sigma=gnss_innov_sigma)
         _blocks.mahony_init(self._s, config=config)
 
     def set_attitude(self, q_wxyz) -> None:

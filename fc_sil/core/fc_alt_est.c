@@ -16,6 +16,7 @@ void fc_alt_est_reset(fc_alt_est_t *e)
     e->accel_up_m_s2 = 0.0f;
     e->ground_pressure_pa = 0.0f;
     e->baro_alt_m = 0.0f;
+    e->innov_m = 0.0f;
     e->last_baro_ns = 0;
     e->have_baro = false;
     e->rejected = 0;
@@ -64,9 +65,11 @@ fc_status_t fc_alt_est_baro(fc_alt_est_t *e, int64_t sim_ns, float pressure_pa, 
         /* On the ground before arming: follow the baro, no dynamics to estimate. */
         e->alt_m = e->baro_alt_m;
         e->climb_m_s = 0.0f;
+        e->innov_m = 0.0f;
     } else {
         const float tau = fmaxf(tau_s, 0.05f);
         const float err = e->baro_alt_m - e->alt_m;
+        e->innov_m = err;
         /* Keep each correction step below one (stable) even at a slow baro. */
         const float k1 = fminf(3.0f / tau * dt_s, 1.0f);
         const float k2 = fminf(3.0f / (tau * tau) * dt_s, 1.0f);

@@ -34,6 +34,7 @@ typedef struct fc_alt_est {
     float accel_up_m_s2;      /* last bias-corrected vertical acceleration, up [m/s^2] */
     float ground_pressure_pa; /* p0 [Pa] */
     float baro_alt_m;         /* last baro altitude over p0 [m] */
+    float innov_m;            /* last in-flight baro innovation, baro - estimate [m] */
     int64_t last_baro_ns;     /* sim time of the last baro sample [ns] */
     bool have_baro;
     uint32_t rejected;        /* baro samples refused (non-finite, <= 0 Pa) */

@@ -33,6 +33,8 @@ static void map_estimation(const fc_params_t *p, fc_core_config_t *cfg)
     a->bias_enable = p->sb_bias_en != 0;
     a->kp_gnss = p->sb_ahrs_gps_kp;
     a->ki_gnss = p->sb_ahrs_gps_ki;
+    a->gnss_boost = p->sb_ahrs_gps_bst;
+    a->gnss_innov_sigma = p->sb_ahrs_gps_inn;
     cfg->ahrs_ground = *a;
     cfg->ahrs_ground.kp = fmaxf(p->sb_ahrs_kp, FC_AHRS_GROUND_KP);
     cfg->ahrs_ground.ki = fmaxf(p->sb_ahrs_ki, FC_AHRS_GROUND_KI);
@@ -131,6 +133,9 @@ static void map_vertical_and_motors(const fc_params_t *p, fc_core_config_t *cfg)
     cfg->alt.speed_dn_m_s =
         ((p->pilot_speed_dn > 0.0f) ? p->pilot_speed_dn : p->pilot_speed_up) * 0.01f;
     cfg->alt.hover_throttle = p->mot_thst_hover;
+    cfg->alt_sched.tc_s = p->sb_alt_tc;
+    cfg->alt_sched.tc_hold_s = p->sb_alt_tc_hold;
+    cfg->alt_sched.innov_m = p->sb_alt_innov;
 
     cfg->spool.liftoff_alt_m = p->sb_liftoff_alt;
     cfg->spool.spin_arm = p->mot_spin_arm;

@@ -15,6 +15,7 @@
 #include "fc_attitude.h"
 #include "fc_ins.h"
 #include "fc_mahony.h"
+#include "fc_sched.h"
 #include "fc_mixer.h"
 #include "fc_params.h"
 #include "fc_rate_pid.h"
@@ -35,6 +36,7 @@ typedef struct fc_core_config {
     fc_trim_config_t trim;
     fc_mixer_config_t mix;
     fc_alt_ctrl_config_t alt;
+    fc_alt_sched_config_t alt_sched; /* the vertical filter's time constants (fc_sched.h) */
     fc_spool_config_t spool;
     fc_sysid_config_t sysid;
     float angle_max_rad;            /* roll and pitch target limit (ANGLE_MAX) [rad] */

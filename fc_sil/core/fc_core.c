@@ -87,6 +87,7 @@ void fc_core_reset(fc_core_t *c)
     fc_state_source_reset(&c->source);
     fc_vehicle_state_reset(&c->state);
     fc_alt_est_reset(&c->alt_est);
+    fc_alt_sched_reset(&c->alt_sched, &c->cfg.alt_sched);
     fc_alt_ctrl_init(&c->alt_ctrl, &c->cfg.alt, pwm_period_s(c));
     fc_gnss_aid_reset(&c->gnss_aid);
     c->gnss_aid_count = 0;
@@ -190,9 +191,33 @@ fc_status_t fc_core_imu_step(fc_core_t *c, int64_t sim_ns, const float accel_frd
 
 /* ---- other sensors and ground truth ------------------------------------- */
 
+/* Holding an altitude in steady flight: the phase in which the vertical
+ * filter may run its quiet time constant (fc_sched.h). Not while on the
+ * ground, in a climb-rate or throttle mode, seeking a target (more than
+ * FC_ALT_HOLD_ERR_M away, or the loop asking more than FC_LAND_CLIMB_M_S,
+ * the speed the land detector calls "still"), nor landing (target at or
+ * below SB_LIFTOFF_ALT): a touchdown must show at once. */
+#define FC_ALT_HOLD_ERR_M 0.5f
+static bool alt_holding(const fc_core_t *c)
+{
+    return c->in.armed != 0 && c->spool_logic.airborne != 0
+           && c->in.alt_mode == FC_ALT_MODE_ALTITUDE
+           && c->in.alt_target_m > c->params.sb_liftoff_alt
+           && fabsf(c->in.alt_target_m - c->alt_est.alt_m) < FC_ALT_HOLD_ERR_M
+           && fabsf(c->alt_ctrl.climb_target_m_s) < FC_LAND_CLIMB_M_S;
+}
+
 fc_status_t fc_core_baro_step(fc_core_t *c, int64_t sim_ns, float pressure_pa)
 {
-    fc_status_t st = fc_alt_est_baro(&c->alt_est, sim_ns, pressure_pa, c->params.sb_alt_tc,
+    /* The innovation of the previous sample (10 ms old) picks this one's gain. */
+    float dt_s = 0.0f;
+    if (c->alt_est.have_baro && sim_ns > c->alt_est.last_baro_ns) {
+        dt_s = fminf((float)(sim_ns - c->alt_est.last_baro_ns) * 1e-9f, FC_MAX_IMU_DT_S);
+    }
+    const float tau_s =
+        fc_alt_sched_step(&c->alt_sched, &c->cfg.alt_sched, alt_holding(c), c->alt_est.innov_m,
+                          dt_s);
+    fc_status_t st = fc_alt_est_baro(&c->alt_est, sim_ns, pressure_pa, tau_s,
                                      c->in.armed == 0);
     if (st != FC_OK) {
         c->rejected_count++;

@@ -116,6 +116,7 @@ typedef struct fc_core {
     fc_mahony_t ahrs;
     bool ahrs_ground;         /* ahrs runs the ground configuration */
     fc_alt_est_t alt_est;
+    fc_alt_sched_t alt_sched; /* its time constant, by flight phase and innovation */
     fc_gnss_aid_t gnss_aid;   /* IMU history for the GNSS-aided tilt correction */
     uint32_t gnss_aid_count;  /* GNSS fixes that corrected the tilt so far */
     fc_gnss_store_t gnss;

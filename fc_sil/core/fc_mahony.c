@@ -182,8 +182,10 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
     float kp = cfg->kp, ki = cfg->ki, w = m->trust;
     if (fc_mahony_gnss_active(m)) {
         fc_quat_rotate_inv(q, m->gnss_err_ned_rad, e);
-        kp = cfg->kp_gnss;
-        ki = cfg->ki_gnss;
+        const fc_aid_sched_config_t sc = {cfg->gnss_boost, cfg->gnss_innov_sigma};
+        const float bw = fc_aid_sched_step(&m->gnss_sched, &sc, m->gnss_err_ned_rad, dt_s);
+        kp = cfg->kp_gnss * bw;
+        ki = cfg->ki_gnss * bw * bw; /* KI = w^2: the same damping at s times w */
         w = 1.0f; /* already free of the vehicle's acceleration: no trust weighting */
         if (m->heading_valid && cfg->kmag > 0.0f) {
             /* A positive down component means the estimate's heading is east of
@@ -297,6 +299,7 @@ void fc_mahony_gnss_forget(fc_mahony_t *m)
     m->gnss_err_down_rad = 0.0f;
     m->gnss_age_s = 0.0f;
     m->gnss_valid = false;
+    fc_aid_sched_reset(&m->gnss_sched);
 }
 
 bool fc_mahony_gnss_active(const fc_mahony_t *m)
@@ -326,7 +329,9 @@ fc_status_t fc_mahony_gnss(fc_mahony_t *m, const float f_imu_ned_m_s2[3],
     /* Same convention as the accelerometer path (measured x expected, there in
      * body axes): R (a x b) = (R a) x (R b), so this is that error in NED. The
      * down component is a heading error; the magnetometer owns the heading. */
+    const float since_prev_s = m->gnss_valid ? m->gnss_age_s : 0.0f;
     fc_cross3(a, b, m->gnss_err_ned_rad);
+    fc_aid_sched_fix(&m->gnss_sched, m->gnss_err_ned_rad, since_prev_s);
     m->gnss_err_down_rad = m->gnss_err_ned_rad[2];
     m->gnss_err_ned_rad[2] = 0.0f;
     m->gnss_age_s = 0.0f;

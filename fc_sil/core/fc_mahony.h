@@ -41,7 +41,9 @@
  * which the magnetometer owns) is held until the next fix and, while fresh,
  * replaces the accelerometer tilt error: P gain kp_gnss, I gain ki_gnss. The
  * integrator then learns a gyro bias in flight, where the accelerometer alone
- * cannot tell a bias-driven tilt from the thrust axis.
+ * cannot tell a bias-driven tilt from the thrust axis. kp_gnss and ki_gnss are
+ * the quiet (hover) gains; while the low-passed error stands out of its noise,
+ * their bandwidth rises up to gnss_boost times (fc_sched.h: fc_aid_sched).
  *
  * Heading offset: GNSS velocity is relative to true north, the magnetometer to
  * magnetic north; a wrong COMPASS_DEC (ArduPilot sets it from a table, we take
@@ -66,6 +68,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "fc_sched.h"
 #include "fc_status.h"
 
 typedef struct fc_mahony_config {
@@ -79,6 +82,8 @@ typedef struct fc_mahony_config {
     float still_acc_g;      /* quasi-static: | |a|/g - 1 | below this [g] */
     float kp_gnss;          /* GNSS-aided tilt correction P [1/s] */
     float ki_gnss;          /* GNSS-aided tilt correction I [1/s^2] */
+    float gnss_boost;       /* largest bandwidth factor on them (fc_sched.h); <= 1: none */
+    float gnss_innov_sigma; /* boost threshold, in noise sigmas of the mean error */
     bool trust_ema_enable;  /* false: trust = trust_raw (ablation) */
     bool bias_enable;       /* false: no explicit bias estimate */
 } fc_mahony_config_t;
@@ -97,6 +102,7 @@ typedef struct fc_mahony {
     float gnss_age_s;         /* time since it was measured [s] */
     bool gnss_valid;          /* a GNSS-aided error is held */
     float gnss_err_down_rad;  /* down component of that error (heading information) */
+    fc_aid_sched_t gnss_sched; /* evidence-scheduled bandwidth of the aided gains */
     float heading_offset_rad; /* magnetic heading offset learned from GNSS [rad] */
     float heading_err_rad;    /* latest magnetometer heading error (estimate - mag) */
     float heading_age_s;      /* time since that error was measured [s] */

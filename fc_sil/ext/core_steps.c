@@ -109,7 +109,7 @@ static PyObject *Core_counters(CoreObject *self, PyObject *noargs)
 {
     (void)noargs;
     const fc_core_t *c = &self->core;
-    return Py_BuildValue("{s:K,s:K,s:K,s:K,s:K,s:K,s:K,s:L,s:K,s:O,s:d}", "imu",
+    return Py_BuildValue("{s:K,s:K,s:K,s:K,s:K,s:K,s:K,s:L,s:K,s:O,s:d,s:d,s:d}", "imu",
                          (unsigned long long)c->imu_count,
                          "rate_loop", (unsigned long long)c->loop_count, "pwm",
                          (unsigned long long)c->pwm_count, "rejected",
@@ -120,7 +120,9 @@ static PyObject *Core_counters(CoreObject *self, PyObject *noargs)
                          (long long)c->last_imu_ns, "gnss_aid",
                          (unsigned long long)c->gnss_aid_count, "gnss_aid_active",
                          fc_mahony_gnss_active(&c->ahrs) ? Py_True : Py_False,
-                         "heading_offset_rad", (double)c->ahrs.heading_offset_rad);
+                         "heading_offset_rad", (double)c->ahrs.heading_offset_rad,
+                         "gnss_aid_scale", (double)c->ahrs.gnss_sched.scale,
+                         "alt_tc_s", (double)c->alt_sched.tc_s);
 }
 
 static PyObject *Core_gnss(CoreObject *self, PyObject *noargs)

@@ -9,7 +9,8 @@
 
 #include "fc_mahony.h"
 
-/* kp_gnss and ki_gnss may be left out: 0, the estimator without GNSS aiding. */
+/* kp_gnss and ki_gnss may be left out: 0, the estimator without GNSS aiding;
+ * gnss_boost and gnss_innov_sigma too: fixed aided gains. */
 static const fc_blk_field_t mahony_fields[] = {
     FC_BLK_FIELD(fc_mahony_config_t, kp, FC_BLK_F32),
     FC_BLK_FIELD(fc_mahony_config_t, ki, FC_BLK_F32),
@@ -23,6 +24,8 @@ static const fc_blk_field_t mahony_fields[] = {
     FC_BLK_FIELD(fc_mahony_config_t, bias_enable, FC_BLK_BOOL),
     FC_BLK_OPTIONAL(fc_mahony_config_t, kp_gnss, FC_BLK_F32),
     FC_BLK_OPTIONAL(fc_mahony_config_t, ki_gnss, FC_BLK_F32),
+    FC_BLK_OPTIONAL(fc_mahony_config_t, gnss_boost, FC_BLK_F32),
+    FC_BLK_OPTIONAL(fc_mahony_config_t, gnss_innov_sigma, FC_BLK_F32),
 };
 
 static PyObject *mahony_init(PyObject *m, PyObject *args, PyObject *kwds)
@@ -159,7 +162,7 @@ static PyObject *mahony_state(PyObject *m, PyObject *args)
     fc_mahony_t *mh = fc_blk_state(&b, sizeof *mh, "mahony");
     PyObject *r = NULL;
     if (mh) {
-        r = Py_BuildValue("{s:(dddd),s:(ddd),s:(ddd),s:d,s:d,s:O,s:O,s:O}", "q_wxyz",
+        r = Py_BuildValue("{s:(dddd),s:(ddd),s:(ddd),s:d,s:d,s:O,s:O,s:O,s:d}", "q_wxyz",
                           (double)mh->q_wxyz[0], (double)mh->q_wxyz[1], (double)mh->q_wxyz[2],
                           (double)mh->q_wxyz[3], "bias_rad_s", (double)mh->bias_rad_s[0],
                           (double)mh->bias_rad_s[1], (double)mh->bias_rad_s[2], "integ_rad_s",
@@ -167,7 +170,8 @@ static PyObject *mahony_state(PyObject *m, PyObject *args)
                           (double)mh->integ_rad_s[2], "trust", (double)mh->trust, "trust_raw",
                           (double)mh->trust_raw, "still", mh->still ? Py_True : Py_False,
                           "heading_valid", mh->heading_valid ? Py_True : Py_False,
-                          "gnss_active", fc_mahony_gnss_active(mh) ? Py_True : Py_False);
+                          "gnss_active", fc_mahony_gnss_active(mh) ? Py_True : Py_False,
+                          "gnss_scale", (double)mh->gnss_sched.scale);
     }
     PyBuffer_Release(&b);
     return r;

@@ -1,0 +1,110 @@
+"""fc_sched.c: estimator gains scheduled by flight phase and evidence, through the real core.
+
+The vertical filter runs SB_ALT_TC_HOLD (quiet) only while holding an altitude in steady
+flight and SB_ALT_TC (fast) on the ground, in a climb or descent, and when the baro
+innovation is large. The GNSS-aided Mahony gains stay at SB_AHRS_GPS_KP/KI while the mean
+aided tilt error is within its noise and rise (up to SB_AHRS_GPS_BST in bandwidth) when a
+persistent error shows a real bias.
+"""
+
+import os
+import sys
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.dirname(__file__))
+
+import test_alt as A  # noqa: E402  (the vertical plant)
+import test_gnss_aid as T  # noqa: E402  (the synthetic aided flight)
+
+from silbridge.fc_sil import blocks as B  # noqa: E402
+from silbridge.fc_sil.flight_core import FlightCore  # noqa: E402
+
+G = 9.80665
+
+
+def test_vertical_filter_is_fast_on_the_ground_and_quiet_in_a_steady_hold():
+    fc = FlightCore()
+    plant = A.VerticalPlant(hover_throttle=0.35)
+    tc, tc_hold = fc.get_param("SB_ALT_TC"), fc.get_param("SB_ALT_TC_HOLD")
+    assert tc_hold > tc
+    A.fly(fc, plant, 1.0)                                   # disarmed, on the ground
+    assert fc.counters()["alt_tc_s"] == pytest.approx(tc)
+    fc.arm()
+    fc.set_altitude_target(3.0)
+    A.fly(fc, plant, 1.0, t0_ms=1000)                       # climbing: fast
+    assert fc.counters()["alt_tc_s"] == pytest.approx(tc, rel=0.02)
+    A.fly(fc, plant, 13.0, t0_ms=2000)                      # holding 3 m: quiet
+    assert fc.counters()["alt_tc_s"] == pytest.approx(tc_hold, rel=0.05)
+    fc.set_altitude_target(0.0)                             # landing: fast again
+    A.fly(fc, plant, 1.0, t0_ms=15000)
+    assert fc.counters()["alt_tc_s"] == pytest.approx(tc, rel=0.05)
+
+
+def test_vertical_filter_goes_fast_on_a_large_baro_innovation():
+    # Holding 3 m, the vehicle is displaced 1 m at once (nothing announced it): the
+    # quiet filter lags, the low-passed innovation grows past SB_ALT_INNOV and the fast
+    # time constant takes over before the altitude error alone would end the hold.
+    fc = FlightCore()
+    plant = A.VerticalPlant(hover_throttle=0.35)
+    fc.arm()
+    fc.set_altitude_target(3.0)
+    A.fly(fc, plant, 14.0)
+    tc_hold = fc.get_param("SB_ALT_TC_HOLD")
+    assert fc.counters()["alt_tc_s"] == pytest.approx(tc_hold, rel=0.05)
+    plant.h += 1.0
+    st, _, _ = A.fly(fc, plant, 0.8, t0_ms=14000)
+    assert abs(st["alt_target_m"][-1] - st["alt_est_m"][-1]) < 0.5    # still "holding"
+    assert fc.counters()["alt_tc_s"] < 0.6 * tc_hold
+
+
+def test_no_scheduling_when_both_time_constants_agree():
+    fc = FlightCore({"SB_ALT_TC_HOLD": 2.0})
+    plant = A.VerticalPlant(hover_throttle=0.35)
+    fc.arm()
+    fc.set_altitude_target(3.0)
+    A.fly(fc, plant, 15.0)
+    assert fc.counters()["alt_tc_s"] == pytest.approx(2.0)
+
+
+def _doublet_flight(bias):
+    recs, t, q = T.flight(T.doublets(20.0), T.zero, gyro_bias=bias, t_end_s=12.0)
+    return recs, t, q
+
+
+def test_aided_gains_stay_quiet_without_a_fault_and_rise_after_a_bias_step():
+    recs, t, q = T.flight(T.zero, T.zero, t_end_s=12.0)     # level hover, no bias
+    fc, _, _, _ = T.fly(recs, t, q)
+    assert fc.counters()["gnss_aid_scale"] == pytest.approx(1.0)
+    recs, t, q = _doublet_flight(T._bias_step)              # 0.04 rad/s at 8 s
+    fc, _, _, _ = T.fly(recs, t, q)
+    assert fc.counters()["gnss_aid_scale"] > 1.5
+    assert fc.counters()["gnss_aid_scale"] <= fc.get_param("SB_AHRS_GPS_BST") + 1e-6
+
+
+def test_aided_gain_boost_is_bounded_and_off_at_one():
+    recs, t, q = _doublet_flight(T._bias_step)
+    fc, _, _, _ = T.fly(recs, t, q, {"SB_AHRS_GPS_BST": 1.0})
+    assert fc.counters()["gnss_aid_scale"] == pytest.approx(1.0)
+
+
+def test_mahony_block_boost_follows_a_persistent_error_not_a_noisy_one():
+    # A 2 deg tilt error handed in fix after fix (the IMU side is fed as measured, not
+    # through the estimate, so the error persists): the mean stands out, the bandwidth
+    # rises to the bound. The same size with alternating sign (noise that cancels in the
+    # mean) leaves the gains alone once the noise has been measured.
+    def run(sign_flip):
+        m = B.Mahony(gnss_boost=3.0, gnss_innov_sigma=3.0)
+        rng = np.random.default_rng(0)
+        up = np.array([0.0, 0.0, -G])
+        for k in range(100):                                # 10 s of 10 Hz fixes
+            a = np.radians(2.0) * ((-1) ** k if sign_flip else 1.0)
+            a += rng.normal(0.0, np.radians(0.2))
+            f_gnss = np.array([0.0, np.sin(a) * -G, -np.cos(a) * G])
+            assert m.gnss(up, f_gnss) == 0
+            m.run(np.zeros((100, 3)), np.tile(up, (100, 1)), 0.001)
+        return m.state()["gnss_scale"]
+
+    assert run(sign_flip=False) == pytest.approx(3.0, rel=0.02)
+    assert run(sign_flip=True) == pytest.approx(1.0, abs=0.05)
