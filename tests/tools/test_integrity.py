@@ -118,8 +118,20 @@ def test_run_interrupted_before_its_first_sample_passes(tmp_path, run):
     LogWriter(path, metadata=run.metadata).close(interrupted="SIGINT")
     report = inspect_log(read_log(path))
     assert report.problems == []
-    assert "/imu: no rows (the run stopped before its first sample)" in report.notes
+    assert "/imu: no rows (the run ended within its first samples)" in report.notes
     assert report.notes[0] == "run interrupted by SIGINT at 0.000 s of sim time (planned 4 s)"
+
+    # GNSS at 10 Hz stopped at 0.25 s: its first fix may still be in flight (rounding slack)
+    gnss = tmp_path / "gnss.mcap"
+    with LogWriter(gnss, metadata=run.metadata) as w:
+        for name in ("/imu", "/gt_att"):
+            w.write(name, run.channels[name][:250])
+    log = read_log(gnss)
+    log.end["interrupted"] = "SIGINT"
+    log.end["end_sim_ns"] = 250_000_000
+    problems = inspect_log(log).problems
+    assert not [p for p in problems if p.startswith("/gnss")], problems
+    assert "/baro: no rows, but the run config sets 100 Hz" in problems
 
     late = tmp_path / "late.mcap"
     with LogWriter(late, metadata=run.metadata) as w:

@@ -204,14 +204,16 @@ def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
     for name in sorted(set(log.channels) | set(rates)):
         rows = log.channels.get(name)
         if rows is None or not len(rows):
-            # A run stopped (Ctrl-C) before its first sample of a stream owes none of it:
-            # the second worker of a campaign may be stopped while still starting up.
-            owed = name in rates and not (end.get("interrupted") and duration is not None
-                                          and duration * rates[name] < 1.0)
+            # A stream owes no rows over a span too short for more samples than the rounding
+            # slack (as with rows below): a run stopped (Ctrl-C) just after it started, e.g.
+            # a campaign's second worker, or GNSS whose first fix comes one period + latency in.
+            due = None if duration is None or name not in rates else \
+                int(math.floor(rates[name] * duration + 1e-6))
+            owed = name in rates and (due is None or due > ROUNDING_SLACK)
             if owed:
                 problems.append(f"{name}: no rows, but the run config sets {rates[name]:g} Hz")
             elif name in rates:
-                notes.append(f"{name}: no rows (the run stopped before its first sample)")
+                notes.append(f"{name}: no rows (the run ended within its first samples)")
             continue
         span = duration
         if own_span and len(rows) and "sim_ns" in rows.dtype.names:
