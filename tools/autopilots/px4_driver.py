@@ -3,7 +3,10 @@
 PX4 instance N's API/offboard link ('onboard' mode) listens on UDP 14580+N and sends to
 127.0.0.1:14540+N: the driver binds 14540+N and talks back to 14580+N. In its own thread it
 sends a heartbeat (1 Hz wall), asks for ATTITUDE_TARGET and LOCAL_POSITION_NED at STREAM_HZ
-(sim time), then every RETRY_SIM_S of sim time until the take-off is accepted: arm (PX4
+(sim time; again every STREAM_RETRY_SIM_S until each has arrived: PX4 sometimes drops the
+first request at boot, and without LOCAL_POSITION_NED the companion's altitude loop has no
+altitude, the forwarder starts late on its 10 s timer and holds hover thrust open loop),
+then every RETRY_SIM_S of sim time until the take-off is accepted: arm (PX4
 arms once its pre-flight checks pass, some 10-30 s of sim time after boot), and once armed
 MAV_CMD_NAV_TAKEOFF (altitude: MIS_TAKEOFF_ALT, set to the scenario's). After the take-off,
 `want_offboard()` (from the setpoint forwarder, once it streams) makes it switch PX4 to
@@ -11,7 +14,9 @@ OFFBOARD (MAV_CMD_DO_SET_MODE, custom main mode 6) until the heartbeat says so: 
 the switch only while attitude targets arrive (> 2 Hz), which the forwarder guarantees.
 
 Reported: ATTITUDE_TARGET (PX4's attitude controller target) into `target`, the local
-altitude and climb rate (LOCAL_POSITION_NED), armed state, PX4's main/sub mode, STATUSTEXT.
+altitude and climb rate (LOCAL_POSITION_NED), armed state, PX4's main/sub mode, STATUSTEXT,
+and the sim times of the first heartbeat in OFFBOARD and of the first one out of it after
+that (`offboard_since_s`, `offboard_left_s`): `offboard` alone is only the mode at the end.
 `send_attitude_target` is called from the physics thread; every write holds `_tx_lock`.
 """
 
@@ -30,6 +35,8 @@ from silbridge.tools.autopilots.sitl_px4 import OFFBOARD_LOCAL_BASE, OFFBOARD_RE
 STREAM_HZ = 50.0
 RETRY_SIM_S = 2.0
 MODE_RETRY_SIM_S = 0.5
+STREAM_RETRY_SIM_S = 0.5
+STREAMS = (mav.MAVLINK_MSG_ID_ATTITUDE_TARGET, mav.MAVLINK_MSG_ID_LOCAL_POSITION_NED)
 MAIN_MODE_AUTO, MAIN_MODE_OFFBOARD = 4, 6
 SUB_MODE_TAKEOFF = 2
 
@@ -51,6 +58,9 @@ class Px4Driver(AutopilotDriver):
                            f"({e.strerror}): another program uses PX4 instance {instance}") from None
         self.main_mode = self.sub_mode = None
         self.offboard_wanted = False
+        self.offboard_since_s: float | None = None   # sim time, first heartbeat in OFFBOARD
+        self.offboard_left_s: float | None = None    # ... first one out of it after that
+        self.heard: set[int] = set()                  # message ids received from PX4
         self.alt_m: float | None = None        # LOCAL_POSITION_NED -z
         self.climb_m_s: float | None = None    # LOCAL_POSITION_NED -vz
 
@@ -77,7 +87,7 @@ class Px4Driver(AutopilotDriver):
         t0 = time.monotonic()
         next_beat = 0.0
         next_try = next_mode = None
-        asked = False
+        next_ask = None
         while not self._halt.is_set():
             now = time.monotonic()
             if now >= next_beat:
@@ -95,12 +105,12 @@ class Px4Driver(AutopilotDriver):
                     raise Px4Error(f"no heartbeat from PX4 on UDP {self.sock.getsockname()[1]} "
                                    f"in {self.connect_timeout_s:g} s")
                 continue
-            if not asked:
-                for msg_id in (mav.MAVLINK_MSG_ID_ATTITUDE_TARGET,
-                               mav.MAVLINK_MSG_ID_LOCAL_POSITION_NED):
-                    self._command(mav.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / STREAM_HZ)
-                asked = True
             t = self.sim_time_s()
+            missing = [i for i in STREAMS if i not in self.heard]
+            if missing and (next_ask is None or t >= next_ask):
+                next_ask = t + STREAM_RETRY_SIM_S
+                for msg_id in missing:
+                    self._command(mav.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / STREAM_HZ)
             if not self.took_off:
                 if next_try is None or t >= next_try:
                     next_try = t + RETRY_SIM_S
@@ -116,8 +126,16 @@ class Px4Driver(AutopilotDriver):
                     self._command(mav.MAV_CMD_DO_SET_MODE, mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
                                   MAIN_MODE_OFFBOARD, 0)
 
+    def _note_offboard(self) -> None:
+        if self.offboard:
+            if self.offboard_since_s is None:
+                self.offboard_since_s = self.sim_time_s()
+        elif self.offboard_since_s is not None and self.offboard_left_s is None:
+            self.offboard_left_s = self.sim_time_s()
+
     def _handle(self, m) -> None:
         kind = m.get_type()
+        self.heard.add(m.get_msgId())
         if kind == "HEARTBEAT":
             if m.autopilot != mav.MAV_AUTOPILOT_PX4:
                 return
@@ -125,6 +143,7 @@ class Px4Driver(AutopilotDriver):
             self.armed = bool(m.base_mode & mav.MAV_MODE_FLAG_SAFETY_ARMED)
             self.main_mode = (m.custom_mode >> 16) & 0xFF
             self.sub_mode = (m.custom_mode >> 24) & 0xFF
+            self._note_offboard()
         elif kind == "LOCAL_POSITION_NED":
             self.alt_m, self.climb_m_s = -m.z, -m.vz
         else:

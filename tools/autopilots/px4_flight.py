@@ -95,8 +95,21 @@ def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: st
                        **forwarder.summary())
     return flight_summary("px4", sc, res, run, sink, log_path,
                           link={"hil_link": res.stats, "startup_check": res.startup_check},
-                          imu_hz=phys.sim.imu_hz, offboard=driver.offboard,
+                          imu_hz=phys.sim.imu_hz, **_offboard(driver, sink),
                           **forwarder.summary())
+
+
+def _offboard(driver, sink) -> dict:
+    """PX4's OFFBOARD mode over the flight: `offboard` at the end, `offboard_from_s` the
+    flight time (from the take-off command) of the first heartbeat in it and
+    `offboard_left_s` of the first one out of it after that (None: never)."""
+    t0 = sink.t0_ns / _NS
+
+    def flight_s(t):
+        return None if t is None else round(t - t0, 3)
+
+    return {"offboard": driver.offboard, "offboard_from_s": flight_s(driver.offboard_since_s),
+            "offboard_left_s": flight_s(driver.offboard_left_s)}
 
 
 def _metadata(sc, phys, duration_s, params, binary, realtime) -> dict:

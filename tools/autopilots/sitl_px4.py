@@ -25,6 +25,7 @@ import signal
 import socket
 import subprocess
 
+from silbridge.bridge.atmosphere import G0, R_AIR, isa_pressure_pa, isa_temperature_k
 from silbridge.tools.autopilots.autopilot_run import (
     STOP_GRACE_S,
     Autopilot,
@@ -165,11 +166,24 @@ def px4_params(sim, scenario, *, logging: bool = False, overrides: dict | None =
         # Height from the barometer (1.2 Pa noise, ~0.1 m), not GNSS (3.2 m Gauss-Markov):
         # the altitude PX4 reports is what the companion computer holds.
         "EKF2_HGT_REF": 0,
+        # ... weighted as the baro it gets. PX4's default (3.5 m) is for a real baro in
+        # propwash; against that the EKF's height follows the IMU's vertical dead reckoning,
+        # and our accelerometer's bias walk and warm-up drift pulled it 0.3-0.8 m off the
+        # truth within two minutes of hover (issue 13).
+        "EKF2_BARO_NOISE": baro_noise_m(scenario),
         "EKF2_GPS_CTRL": 5,         # GNSS horizontal position and velocity, not its altitude
         "SDLOG_MODE": 1 if logging else -1,
     }
     p.update(overrides or {})
     return p
+
+
+def baro_noise_m(scenario) -> float:
+    """The scenario's baro white noise as height [m] at home (ISA: dh/dp = R T / (g p)),
+    not below PX4's minimum for EKF2_BARO_NOISE (0.01 m)."""
+    alt = scenario.home.alt_m
+    m_per_pa = R_AIR * isa_temperature_k(alt) / (G0 * isa_pressure_pa(alt))
+    return round(max(0.01, scenario.baro.noise_pa * m_per_pa), 3)
 
 
 def write_params(workdir: str, params: dict) -> str:
