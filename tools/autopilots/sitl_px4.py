@@ -171,6 +171,10 @@ def px4_params(sim, scenario, *, logging: bool = False, overrides: dict | None =
         # and our accelerometer's bias walk and warm-up drift pulled it 0.3-0.8 m off the
         # truth within two minutes of hover (issue 13).
         "EKF2_BARO_NOISE": baro_noise_m(scenario),
+        # Our baro has no propwash ground effect: PX4 must not discard the readings that
+        # say "higher" while it believes it is in ground effect (default dead zone 4 m),
+        # or its height lags the climb out of ground effect.
+        "EKF2_GND_EFF_DZ": 0.0,
         "EKF2_GPS_CTRL": 5,         # GNSS horizontal position and velocity, not its altitude
         "SDLOG_MODE": 1 if logging else -1,
     }
