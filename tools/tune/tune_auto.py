@@ -83,6 +83,11 @@ def _pitch_twin(name: str) -> str:
     return name.replace("_RLL_", "_PIT_").replace("ATC_ACCEL_R_", "ATC_ACCEL_P_")
 
 
+def tied_twins(space) -> dict[str, str]:
+    """Roll name -> its pitch twin, for the names of `space` that have one in it."""
+    return {n: _pitch_twin(n) for n in space if _pitch_twin(n) != n and _pitch_twin(n) in space}
+
+
 def search_space(axes, input_tc: bool = True) -> dict[str, tuple[float, float, bool]]:
     """Parameter -> (low, high, log) for the tuned axes. Yaw's heading P stays as is:
     0 means rate damping only (no heading hold), a different controller, not a gain."""
@@ -223,7 +228,7 @@ def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> di
     full = search_space(cfg.axes, cfg.input_tc)
     tied = cfg.tie_roll_pitch and {"roll", "pitch"} <= set(cfg.axes)
     # tied: sample the roll names only; each pitch name copies its roll twin
-    twins = {n: _pitch_twin(n) for n in full if _pitch_twin(n) in full} if tied else {}
+    twins = tied_twins(full) if tied else {}
     space = {n: r for n, r in full.items() if n not in twins.values()}
     defaults = P.defaults()
     start = {n: float(base.get(n, defaults[n])) for n in space}
@@ -360,7 +365,8 @@ def run_auto(cfg: AutoConfig, out_dir: Path, *, pool, progress=True, out=print) 
     if chosen is None:
         # No feasible trial at all: report the defaults as the result, and say so.
         chosen = (found["baseline"], base, before_col,
-                  {"met": False, "note": "no trial met the constraints"})
+                  {**check(before, before, margins_before, cfg, compare_means),
+                   "met": False, "note": "no trial met the constraints: the defaults"})
     cand, params, after_col, verdict = chosen
     after, margins = after_col["means"], after_col["margins"]
     tuned = {k: float(v) for k, v in cand["candidate"].items()}
