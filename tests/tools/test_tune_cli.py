@@ -31,11 +31,15 @@ def _tune(capsys, *argv):
 
 def test_tune_auto_tiny_budget_writes_a_parm_the_vehicle_loads(tmp_path, capsys):
     out_dir = tmp_path / "auto"
+    other = tmp_path / "other.parm"      # a gain set scored beside ours (--compare)
+    other.write_text("ATC_RAT_RLL_P 0.12\nATC_ANG_RLL_P 6\n")
     rc, out, err = _tune(capsys, "auto", "--axis", "roll", "--trials", "2", "--runs", "1",
-                         "--jobs", "2", "--out", str(out_dir), "--no-progress", "--json")
+                         "--jobs", "2", "--out", str(out_dir), "--no-progress", "--json",
+                         "--compare", str(other))
     assert rc == 0, err
     d = json.loads(out)
-    assert set(d) == {"params", "margins", "before", "after", "parm_file"}
+    assert {"params", "margins", "before", "after", "parm_file", "margins_before",
+            "verdict"} <= set(d)
     assert set(d["margins"]) == {"roll"}
     for key in ("phase_margin_deg", "gain_margin_db", "crossover_hz", "bandwidth_hz",
                 "delay_margin_ms"):
@@ -44,6 +48,11 @@ def test_tune_auto_tiny_budget_writes_a_parm_the_vehicle_loads(tmp_path, capsys)
         assert set(d[side]) == {"S1", "S4"}
         assert "pwm_pp_us" in d[side]["S1"] and "sat_pct" in d[side]["S4"]
     assert "ATC_RAT_RLL_P" in d["params"] and "ATC_ANG_RLL_P" in d["params"]
+    cmp = d["compare"]["other"]
+    assert cmp["params"] == {"ATC_RAT_RLL_P": 0.12, "ATC_ANG_RLL_P": 6.0}
+    assert "att_rms_cmd_deg" in cmp["table1"]["S4"] and "att_p95_cmd_deg" in cmp["table1"]["S4"]
+    assert "phase_margin_deg" in cmp["margins"]["roll"] and "other" in d["verdict"]["beats"]
+    assert "S4 attitude RMS vs the command" in err and "other" in err
     parm = d["parm_file"]
     assert os.path.exists(parm) and (out_dir / "index.html").exists()
 

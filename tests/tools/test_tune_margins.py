@@ -65,3 +65,22 @@ def test_bandwidth_of_a_first_order_loop():
     f = np.geomspace(0.1, 200.0, 5000)
     t = 1.0 / (2j * np.pi * f / wb + 1.0)
     assert bandwidth_hz(f, t) == pytest.approx(7.0 * math.sqrt(10 ** 0.3 - 1), rel=1e-3)
+
+
+def test_auto_search_space_holds_the_shaper_and_autotune_sized_angle_p():
+    """The shaper dominates S4's error against the command, so it is searched (tune_auto's
+    docstring); ATC_INPUT_TC only on request; ranges within the FC's declared ones."""
+    from silbridge.fc_sil import params as P
+    from silbridge.tools.tune.tune_auto import _pitch_twin, search_space, tied_twins
+
+    sp = search_space(("roll", "pitch"))
+    assert {"ATC_ACCEL_R_MAX", "ATC_ACCEL_P_MAX", "ATC_INPUT_TC"} <= set(sp)
+    assert sp["ATC_ANG_RLL_P"][1] >= 22.3          # what ArduCopter's AUTOTUNE saved here
+    assert "ATC_INPUT_TC" not in search_space(("roll",), input_tc=False)
+    for name, (lo, hi, _log) in sp.items():
+        assert P.BY_NAME[name].min <= lo < hi <= P.BY_NAME[name].max
+    assert _pitch_twin("ATC_ACCEL_R_MAX") == "ATC_ACCEL_P_MAX"
+    assert _pitch_twin("ATC_RAT_RLL_D") == "ATC_RAT_PIT_D"
+    twins = tied_twins(sp)       # roll and pitch share one sampled value
+    assert twins["ATC_ACCEL_R_MAX"] == "ATC_ACCEL_P_MAX" and twins["ATC_ANG_RLL_P"] == "ATC_ANG_PIT_P"
+    assert set(twins.values()) == {n for n in sp if "_PIT_" in n or n == "ATC_ACCEL_P_MAX"}

@@ -3,7 +3,8 @@ an automatic gain search, on the same C core the benchmark flies.
 
     silbridge tune sysid --axis roll[,pitch,yaw] [--inject output|input|both]
     silbridge tune step  --axis roll[,pitch,yaw]
-    silbridge tune auto  --axis roll,pitch --out DIR [--trials N]
+    silbridge tune auto  --axis roll,pitch --out DIR [--trials N] [--compare FILE.parm]
+    silbridge tune anchor --axis roll,pitch [--ours FILE.parm]
 
 Every form takes --json (one JSON object on stdout) and writes its report
 (index.html, report.md, PNG figures, summary.json) to --out.
@@ -65,6 +66,12 @@ def add_arguments(p) -> None:
     a.add_argument("--pm-min", type=float, default=45.0, help="phase margin floor [deg]")
     a.add_argument("--gm-min", type=float, default=6.0, help="gain margin floor [dB]")
     a.add_argument("--no-progress", action="store_true", help="no progress bar")
+    a.add_argument("--compare", action="append", default=[], metavar="FILE.parm",
+                   help="another gain set (e.g. tune anchor's arducopter_autotune.parm) scored "
+                        "beside the defaults and ours on the same seeds; the tuned set must "
+                        "beat it on S4 (repeatable)")
+    a.add_argument("--keep-input-tc", action="store_true",
+                   help="leave ATC_INPUT_TC out of the search (AUTOTUNE does not set it)")
     n = sub.add_parser("anchor", help="fly ArduCopter's own AUTOTUNE on our physics; its "
                                       "gains through Table 1 and the margins")
     _common(n, "tune-out/anchor")

@@ -42,6 +42,11 @@ GAIN_NAMES = tuple(f"ATC_RAT_{a}_{t}" for a in ("RLL", "PIT", "YAW")
     ("ATC_ANG_RLL_P", "ATC_ANG_PIT_P", "ATC_ANG_YAW_P", "INS_GYRO_FILTER",
      "ATC_ACCEL_R_MAX", "ATC_ACCEL_P_MAX", "ATC_ACCEL_Y_MAX")
 AXIS_BITS = {"roll": 1, "pitch": 2, "yaw": 4}     # AUTOTUNE_AXES
+# ArduCopter 4.6's documented @Range where its AUTOTUNE writes past it (our FC takes
+# AUTOTUNE's values: fc_params.def); a second .parm holds the gains cut to these.
+DOCUMENTED_RANGE = {"ATC_ANG_RLL_P": (3.0, 12.0), "ATC_ANG_PIT_P": (3.0, 12.0),
+                    "ATC_ANG_YAW_P": (3.0, 12.0), "ATC_ACCEL_R_MAX": (0.0, 180000.0),
+                    "ATC_ACCEL_P_MAX": (0.0, 180000.0)}
 
 
 class AutotuneDriver(MavlinkDriver):
@@ -194,3 +199,9 @@ def for_our_fc(gains: dict, axes) -> tuple[dict, dict]:
             clipped[name] = [gains[name], v]
         applied[name] = v
     return applied, clipped
+
+
+def within_documented(applied: dict) -> dict:
+    """AUTOTUNE's values cut to ArduCopter's documented ranges (DOCUMENTED_RANGE)."""
+    return {n: min(max(v, DOCUMENTED_RANGE[n][0]), DOCUMENTED_RANGE[n][1])
+            if n in DOCUMENTED_RANGE else v for n, v in applied.items()}

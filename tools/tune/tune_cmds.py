@@ -113,27 +113,31 @@ def run_step(args, axes, base: dict, out_dir: Path, pool, say) -> dict:
 
 def run_auto_cmd(args, axes, base: dict, out_dir: Path, pool, say) -> dict:
     from silbridge.tools.tune.tune_auto import AutoConfig, run_auto
+    from silbridge.tools.tune.tune_compare import load_compare
     from silbridge.tools.tune.tune_sysid import TuneError
 
     if args.trials < 1 or args.runs < 1 or args.batch < 1:
         raise TuneError("--trials, --runs and --batch must be >= 1")
+    compare = []
+    for path in args.compare:
+        label, values = load_compare(path)
+        if label in ("defaults", "tuned") or label in dict(compare):
+            raise TuneError(f"--compare {path}: name the file apart from defaults, tuned "
+                            f"and the other --compare files")
+        compare.append((label, tuple(sorted(values.items()))))
     cfg = AutoConfig(axes=axes, trials=args.trials, runs=args.runs, seed=args.seed,
                      batch=args.batch, base_params=tuple(sorted(base.items())),
-                     pm_min=args.pm_min, gm_min=args.gm_min)
+                     pm_min=args.pm_min, gm_min=args.gm_min,
+                     input_tc=not args.keep_input_tc, compare=tuple(compare))
     res = run_auto(cfg, out_dir, pool=pool, progress=not args.no_progress, out=say)
     d = res["details"]
     r = res["result"]
-    tk = d["verdict"].get("track_metric", "att_rms_deg")
-    for label, t in (("before", r["before"]), ("after", r["after"])):
-        say(f"{label}: S4 {tk} {_fmt(t['S4'].get(tk), '{:.3f}')} deg, S1 pwm_pp_us "
-            f"{_fmt(t['S1'].get('pwm_pp_us'))} us, sat S1/S4 {_fmt(t['S1'].get('sat_pct'), '{:.2f}')}"
-            f"/{_fmt(t['S4'].get('sat_pct'), '{:.2f}')} %")
-    for axis, m in r["margins"].items():
-        gm = m.get("gain_margin_db")
-        gm_text = (f"{_fmt(gm)} dB" if gm is not None or m.get("gain_margin_min_db") is None
-                   else f">= {m['gain_margin_min_db']:.1f} dB")
-        say(f"{axis} after: PM {_fmt(m.get('phase_margin_deg'))} deg, GM {gm_text}")
-    say(f"targets met: {d['verdict'].get('met')}; {d['feasible_trials']}/{d['trials']} trials "
+    say(d["comparison_md"])
+    v = d["verdict"]
+    if "beats" in v:
+        say("S4 vs the command, tuned better than: " + ", ".join(
+            f"{lab} {'(crashed)' if ok == 'crashed' else ok}" for lab, ok in v["beats"].items()))
+    say(f"targets met: {v.get('met')}; {d['feasible_trials']}/{d['trials']} trials "
         f"feasible; search {d['search_wall_s']:.0f} s, total {d['wall_s']:.0f} s")
     say(f"parameters: {r['parm_file']}; report: {out_dir / 'index.html'}")
     return r
