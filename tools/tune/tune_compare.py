@@ -87,7 +87,9 @@ def comparison_table(columns: dict, axes, params: dict) -> str:
     for name in SHOWN:
         cells = [f"{float(params[lab].get(name, defaults[name])):g}" for lab in labels]
         lines.append(f"| `{name}` | " + " | ".join(cells) + " |")
-    notes = [f"{lab}: {columns[lab]['failed']}" for lab in labels if columns[lab]["failed"]]
+    # a failure names its set already when it comes from table1_runs ("label: S4: crashed")
+    notes = [f if f.startswith(f"{lab}:") else f"{lab}: {f}"
+             for lab in labels if (f := columns[lab]["failed"])]
     return "\n".join(lines) + ("\n\n" + "\n".join(f"- {n}" for n in notes) if notes else "")
 
 
