@@ -191,20 +191,26 @@ fc_status_t fc_core_imu_step(fc_core_t *c, int64_t sim_ns, const float accel_frd
 
 /* ---- other sensors and ground truth ------------------------------------- */
 
-/* Holding an altitude in steady flight: the phase in which the vertical
- * filter may run its quiet time constant (fc_sched.h). Not while on the
- * ground, in a climb-rate or throttle mode, seeking a target (more than
- * FC_ALT_HOLD_ERR_M away, or the loop asking more than FC_LAND_CLIMB_M_S,
- * the speed the land detector calls "still"), nor landing (target at or
- * below SB_LIFTOFF_ALT): a touchdown must show at once. */
+/* How far the vehicle is from holding an altitude in steady flight, 0..1:
+ * the phase evidence for the vertical filter's time constant (fc_sched.h).
+ * 1 (fast) on the ground, in a climb-rate or throttle mode and while landing
+ * (target at or below SB_LIFTOFF_ALT: a touchdown must show at once). While
+ * seeking a target it rises smoothly, from 0 at FC_ALT_HOLD_ERR_M of altitude
+ * error or FC_LAND_CLIMB_M_S of climb demand (the speed the land detector
+ * calls "still") to 1 at twice either: the hold loop's own correction of a
+ * drifted estimate reaches these sizes, and a hard switch there steps the
+ * time constant and kicks the throttle (issue 14, seed 20 of S1). */
 #define FC_ALT_HOLD_ERR_M 0.5f
-static bool alt_holding(const fc_core_t *c)
+static float alt_seek_demand(const fc_core_t *c)
 {
-    return c->in.armed != 0 && c->spool_logic.airborne != 0
-           && c->in.alt_mode == FC_ALT_MODE_ALTITUDE
-           && c->in.alt_target_m > c->params.sb_liftoff_alt
-           && fabsf(c->in.alt_target_m - c->alt_est.alt_m) < FC_ALT_HOLD_ERR_M
-           && fabsf(c->alt_ctrl.climb_target_m_s) < FC_LAND_CLIMB_M_S;
+    if (c->in.armed == 0 || c->spool_logic.airborne == 0
+        || c->in.alt_mode != FC_ALT_MODE_ALTITUDE
+        || !(c->in.alt_target_m > c->params.sb_liftoff_alt)) {
+        return 1.0f;
+    }
+    const float err = fabsf(c->in.alt_target_m - c->alt_est.alt_m) / FC_ALT_HOLD_ERR_M;
+    const float climb = fabsf(c->alt_ctrl.climb_target_m_s) / FC_LAND_CLIMB_M_S;
+    return fmaxf(err, climb) - 1.0f; /* NaN or above 1: fc_alt_sched_step clamps to 1 */
 }
 
 fc_status_t fc_core_baro_step(fc_core_t *c, int64_t sim_ns, float pressure_pa)
@@ -215,7 +221,8 @@ fc_status_t fc_core_baro_step(fc_core_t *c, int64_t sim_ns, float pressure_pa)
         dt_s = fminf((float)(sim_ns - c->alt_est.last_baro_ns) * 1e-9f, FC_MAX_IMU_DT_S);
     }
     const float tau_s =
-        fc_alt_sched_step(&c->alt_sched, &c->cfg.alt_sched, alt_holding(c), c->alt_est.innov_m,
+        fc_alt_sched_step(&c->alt_sched, &c->cfg.alt_sched, alt_seek_demand(c),
+                          c->alt_est.innov_m,
                           dt_s);
     fc_status_t st = fc_alt_est_baro(&c->alt_est, sim_ns, pressure_pa, tau_s,
                                      c->in.armed == 0);

@@ -60,18 +60,17 @@ void fc_alt_sched_reset(fc_alt_sched_t *s, const fc_alt_sched_config_t *cfg)
     s->tc_s = cfg->tc_s;
 }
 
-float fc_alt_sched_step(fc_alt_sched_t *s, const fc_alt_sched_config_t *cfg, bool holding,
+float fc_alt_sched_step(fc_alt_sched_t *s, const fc_alt_sched_config_t *cfg, float seek,
                         float innov_m, float dt_s)
 {
     if (fc_finitef(innov_m) && dt_s > 0.0f) {
         s->innov_lp_m += fc_ema_alpha(dt_s, FC_ALT_LP_TC_S) * (innov_m - s->innov_lp_m);
     }
-    float demand = 1.0f;
-    if (holding) {
-        /* Smooth: from no demand at SB_ALT_INNOV to full at twice that. */
-        const float thr = fmaxf(cfg->innov_m, 1e-3f);
-        demand = fc_constrainf(fabsf(s->innov_lp_m) / thr - 1.0f, 0.0f, 1.0f);
-    }
+    /* Smooth: from no demand at SB_ALT_INNOV to full at twice that. */
+    const float thr = fmaxf(cfg->innov_m, 1e-3f);
+    const float innov = fc_constrainf(fabsf(s->innov_lp_m) / thr - 1.0f, 0.0f, 1.0f);
+    /* fc_sched_weight reads a NaN seek as full demand. */
+    const float demand = (seek > innov) ? seek : (fc_finitef(seek) ? innov : seek);
     s->w_fast = fc_sched_weight(s->w_fast, demand, FC_ALT_RELEASE_S, dt_s);
     s->tc_s = geometric_blend(cfg->tc_hold_s, cfg->tc_s, s->w_fast);
     return s->tc_s;

@@ -11,9 +11,10 @@
  * evidence says nothing is happening, and its fast one otherwise:
  *
  * Vertical (fc_alt_sched): the quiet time constant only while the vehicle
- * holds an altitude in steady flight (the host's "holding" flag: airborne,
+ * holds an altitude in steady flight (the host's phase evidence: airborne,
  * altitude mode, target above the landing height and near the estimate, no
- * climb demand) AND the low-passed baro innovation (baro - estimate) stays
+ * climb demand; the last two graded, so the loop's own correction of a
+ * drifted estimate does not switch the time constant in one step) AND the low-passed baro innovation (baro - estimate) stays
  * below SB_ALT_INNOV; else SB_ALT_TC. The innovation half catches what no
  * demand announces (a push by the air, an accelerometer shift).
  *
@@ -55,9 +56,11 @@ typedef struct fc_alt_sched {
 
 /* Fast (w 1): a filter that starts on the ground starts fast. */
 void fc_alt_sched_reset(fc_alt_sched_t *s, const fc_alt_sched_config_t *cfg);
-/* One baro sample: holding is the phase evidence, innov_m this sample's
+/* One baro sample: seek is the phase evidence (the demand for the fast
+ * time constant: <= 0 holding, >= 1 not holding, between while the hold
+ * loop seeks its target; NaN counts as 1), innov_m this sample's
  * innovation. Returns the time constant for this sample [s]. */
-float fc_alt_sched_step(fc_alt_sched_t *s, const fc_alt_sched_config_t *cfg, bool holding,
+float fc_alt_sched_step(fc_alt_sched_t *s, const fc_alt_sched_config_t *cfg, float seek,
                         float innov_m, float dt_s);
 
 /* ---- GNSS-aided tilt gains --------------------------------------------- */
