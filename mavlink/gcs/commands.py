@@ -66,6 +66,24 @@ class Call:
     after: Callable[[int], None] | None = None     # called with the MAV_RESULT
 
 
+def _global_point(req: CommandRequest, what: str, *, out_of_range: int):
+    """(lat_e7, lon_e7) of a command's x/y in a GLOBAL frame (COMMAND_INT: integers,
+    COMMAND_LONG: degrees), or the Immediate refusal that names what is wrong."""
+    if req.frame not in REPOSITION_FRAMES:
+        return Immediate(mav.MAV_RESULT_DENIED, f"{what}: frame {req.frame} not supported, "
+                                                f"use GLOBAL(_RELATIVE_ALT)_INT")
+    if req.is_int:
+        lat_e7, lon_e7 = int(req.x), int(req.y)
+    else:
+        if not (math.isfinite(req.x) and math.isfinite(req.y)):
+            return Immediate(mav.MAV_RESULT_DENIED, f"{what}: latitude/longitude missing")
+        lat_e7, lon_e7 = int(round(req.x * 1e7)), int(round(req.y * 1e7))
+    if not (-900_000_000 <= lat_e7 <= 900_000_000
+            and -1_800_000_000 <= lon_e7 <= 1_800_000_000):
+        return Immediate(out_of_range, f"{what}: latitude/longitude out of range")
+    return lat_e7, lon_e7
+
+
 def _int_or(v: float, default: int) -> int:
     return int(v) if math.isfinite(v) else default
 
@@ -142,37 +160,22 @@ class CommandPlanner:
         current home)."""
         if req.p1 == 1.0 or (req.x == 0 and req.y == 0):
             return Call("set_home", (None, None, 0.0, False))
-        if not (math.isfinite(req.x) and math.isfinite(req.y) and math.isfinite(req.z)):
-            return Immediate(mav.MAV_RESULT_DENIED, "Set home: latitude, longitude and "
-                                                    "altitude (param5..7) must be numbers")
-        if req.frame not in REPOSITION_FRAMES:
-            return Immediate(mav.MAV_RESULT_DENIED, f"Set home: frame {req.frame} not "
-                                                    f"supported, use GLOBAL(_RELATIVE_ALT)_INT")
-        if req.is_int:
-            lat_e7, lon_e7 = int(req.x), int(req.y)
-        else:
-            lat_e7, lon_e7 = int(round(req.x * 1e7)), int(round(req.y * 1e7))
-        if not (-900_000_000 <= lat_e7 <= 900_000_000
-                and -1_800_000_000 <= lon_e7 <= 1_800_000_000):
-            return Immediate(mav.MAV_RESULT_FAILED, "Set home: latitude/longitude out of range")
+        if not math.isfinite(req.z):
+            return Immediate(mav.MAV_RESULT_DENIED, "Set home: altitude (param7) missing")
+        point = _global_point(req, "Set home", out_of_range=mav.MAV_RESULT_FAILED)
+        if isinstance(point, Immediate):
+            return point
+        lat_e7, lon_e7 = point
         relative = req.frame in (mav.MAV_FRAME_GLOBAL_RELATIVE_ALT,
                                  mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)
         return Call("set_home", (lat_e7, lon_e7, float(req.z), relative))
 
     @staticmethod
     def _reposition(req: CommandRequest) -> Immediate | Call:
-        if req.frame not in REPOSITION_FRAMES:
-            return Immediate(mav.MAV_RESULT_DENIED, f"Reposition: frame {req.frame} not "
-                                                    f"supported, use GLOBAL(_RELATIVE_ALT)_INT")
-        if req.is_int:
-            lat_e7, lon_e7 = int(req.x), int(req.y)
-        else:
-            if not (math.isfinite(req.x) and math.isfinite(req.y)):
-                return Immediate(mav.MAV_RESULT_DENIED, "Reposition: latitude/longitude missing")
-            lat_e7, lon_e7 = int(round(req.x * 1e7)), int(round(req.y * 1e7))
-        if not (-900_000_000 <= lat_e7 <= 900_000_000 and -1_800_000_000 <= lon_e7
-                <= 1_800_000_000):
-            return Immediate(mav.MAV_RESULT_DENIED, "Reposition: latitude/longitude out of range")
+        point = _global_point(req, "Reposition", out_of_range=mav.MAV_RESULT_DENIED)
+        if isinstance(point, Immediate):
+            return point
+        lat_e7, lon_e7 = point
         if not math.isfinite(req.z):
             return Immediate(mav.MAV_RESULT_DENIED, "Reposition: altitude missing")
         return Call("reposition", (lat_e7, lon_e7, float(req.z), req.frame, float(req.p1),

@@ -147,6 +147,17 @@ class Gcs:
         return self.wait("GLOBAL_POSITION_INT", lambda p: p.relative_alt >= alt_m * 1000,
                          timeout_s) is not None
 
+    def rtl_until_landed(self, timeout_s: float) -> object:
+        """RTL, accepted and entered; pump until disarmed. The last GLOBAL_POSITION_INT."""
+        ack = self.command(mav.MAV_CMD_NAV_RETURN_TO_LAUNCH)
+        assert ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED, (ack, self.texts[-5:])
+        assert self.wait_mode(RTL, 5.0)
+        end = time.monotonic() + timeout_s
+        while self.armed() and time.monotonic() < end:
+            self.pump(0.5)
+        assert not self.armed(), "RTL did not land and disarm"
+        return self.last["GLOBAL_POSITION_INT"]
+
     def fly_velocity(self, vn: float, ve: float, seconds: float, stop=None) -> None:
         """GUIDED velocity setpoints (LOCAL_NED, velocity only), resent every 0.25 s."""
         end = time.monotonic() + seconds

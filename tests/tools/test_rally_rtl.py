@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 import os
 import sys
-import time
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
@@ -19,7 +18,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 sys.path.insert(0, os.path.dirname(__file__))
 
 from autopilots import KINDS, Silbridge, start  # noqa: E402
-from gcs_session import RTL, Gcs, offset_e7  # noqa: E402
+from gcs_session import Gcs, offset_e7  # noqa: E402
 
 RALLY = mav.MAV_MISSION_TYPE_RALLY
 
@@ -48,14 +47,7 @@ def test_rtl_lands_at_the_nearest_rally_point(kind, tmp_path):
         home_lat = home.latitude if hasattr(home, "latitude") else home.lat
         g.fly_velocity(5.0, 0.0, 40.0, stop=lambda: g.last["GLOBAL_POSITION_INT"].lat
                        and _north_m(g.last["GLOBAL_POSITION_INT"].lat, home_lat) > 70.0)
-        ack = g.command(mav.MAV_CMD_NAV_RETURN_TO_LAUNCH)
-        assert ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED, (ack, g.texts[-5:])
-        assert g.wait_mode(RTL, 5.0)
-        end = time.monotonic() + 90.0
-        while g.armed() and time.monotonic() < end:
-            g.pump(0.5)
-        assert not g.armed(), "RTL did not land and disarm"
-        p = g.last["GLOBAL_POSITION_INT"]
+        p = g.rtl_until_landed(90.0)
         n = _north_m(p.lat, home_lat)
         e = (p.lon - home.lon if hasattr(home, "lon") else p.lon - home.longitude) * 1e-7 \
             * 111319.5 * math.cos(math.radians(p.lat * 1e-7))

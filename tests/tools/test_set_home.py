@@ -23,7 +23,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 sys.path.insert(0, os.path.dirname(__file__))
 
 from autopilots import KINDS, start  # noqa: E402
-from gcs_session import RTL, Gcs, offset_e7  # noqa: E402
+from gcs_session import Gcs, offset_e7  # noqa: E402
 
 
 def _home(g: Gcs):
@@ -107,14 +107,7 @@ def test_set_home_moves_and_locks_home_and_rtl_goes_there(kind, tmp_path):
         # relative_alt is above home; alt above sea level
         assert abs((p.alt - p.relative_alt) * 1e-3 - home_alt) < 1.0, (p.alt, p.relative_alt)
 
-        ack = g.command(mav.MAV_CMD_NAV_RETURN_TO_LAUNCH)
-        assert ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED, (ack, g.texts[-5:])
-        assert g.wait_mode(RTL, 5.0)
-        end = time.monotonic() + 120.0
-        while g.armed() and time.monotonic() < end:
-            g.pump(0.5)
-        assert not g.armed(), "RTL did not land and disarm"
-        p = g.last["GLOBAL_POSITION_INT"]
+        p = g.rtl_until_landed(120.0)
         n, e = _north_east_m(p.lat, p.lon, lat, lon)
         assert math.hypot(n, e) < 5.0, f"landed {n:.1f} m N, {e:.1f} m E of the new home"
     except AssertionError as exc:
