@@ -75,6 +75,7 @@ class Scenario:
     setpoints: list[Section]
     source: str
     draws: dict = field(default_factory=dict)
+    fc_params: list[Section] = field(default_factory=list)   # [[fc_param]]: FC parameter sets
 
     @property
     def imu_hz(self) -> int:
@@ -107,31 +108,36 @@ class Scenario:
             "baro": self.baro.to_dict(), "mag": self.mag.to_dict(), "gnss": self.gnss.to_dict(),
             "disturbances": [d.to_dict() for d in self.disturbances],
             "setpoints": [s.to_dict() for s in self.setpoints],
+            "fc_params": [p.to_dict() for p in self.fc_params],
             "source": self.source, "draws": dict(self.draws),
         }
 
 
 # --- public entry point ------------------------------------------------------------------
 
-def load_scenario(name_or_path, seed: int | None = None, overrides: dict | None = None) -> Scenario:
+def load_scenario(name_or_path, seed: int | None = None, overrides: dict | None = None,
+                  check_fc_param=None) -> Scenario:
+    """check_fc_param(name, value): raises ValueError (with a message for the user) for a
+    [[fc_param]] the FC would refuse; the caller that knows the FC gives it."""
     path = _find(name_or_path)
     try:
         with open(path, "rb") as fh:
             raw = tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path.name}: not valid TOML ({exc}); fix the syntax") from None
-    return scenario_from_dict(raw, source=str(path), seed=seed, overrides=overrides)
+    return scenario_from_dict(raw, source=str(path), seed=seed, overrides=overrides,
+                              check_fc_param=check_fc_param)
 
 
 def scenario_from_dict(raw: dict, source: str = "<dict>", seed: int | None = None,
-                       overrides: dict | None = None) -> Scenario:
+                       overrides: dict | None = None, check_fc_param=None) -> Scenario:
     raw = copy.deepcopy(raw)
     where = Path(source).name
     for key, value in (overrides or {}).items():
         _set_dotted(raw, key, value, where)
     if seed is not None:
         raw["seed"] = seed
-    return _Resolver(raw, where, source).scenario()
+    return _Resolver(raw, where, source, check_fc_param).scenario()
 
 
 def _find(name_or_path) -> Path:
@@ -175,8 +181,9 @@ def _set_dotted(raw: dict, dotted: str, value, where: str) -> None:
 # --- validation and draws ----------------------------------------------------------------
 
 class _Resolver:
-    def __init__(self, raw: dict, where: str, source: str):
+    def __init__(self, raw: dict, where: str, source: str, check_fc_param=None):
         self.raw = raw
+        self.check_fc_param = check_fc_param
         self.where = where
         self.source = source
         self.seed = None
@@ -187,7 +194,7 @@ class _Resolver:
 
     def scenario(self) -> Scenario:
         raw = self.raw
-        allowed = set(S.TOP) | set(S.SECTIONS) | {"disturbance", "setpoint"}
+        allowed = set(S.TOP) | set(S.SECTIONS) | {"disturbance", "setpoint", "fc_param"}
         for key in raw:
             if key not in allowed:
                 self.fail(key, f"unknown key; valid top-level keys are {', '.join(sorted(allowed))}")
@@ -195,7 +202,7 @@ class _Resolver:
         if seed_val is S.REQUIRED:
             self.fail("seed", "missing required field; add e.g. 'seed = 1'")
         self.seed = self.value("seed", seed_val, S.TOP["seed"])
-        top = self.table("", raw, S.TOP, skip={"disturbance", "setpoint", *S.SECTIONS})
+        top = self.table("", raw, S.TOP, skip={"disturbance", "setpoint", "fc_param", *S.SECTIONS})
         sections = {}
         for sec, schema in S.SECTIONS.items():
             tbl = raw.get(sec, {})
@@ -211,7 +218,9 @@ class _Resolver:
                       setpoint_rate_hz=top["setpoint_rate_hz"], physics=sections["physics"],
                       home=sections["home"], windows=sections["windows"], imu=sections["imu"],
                       baro=sections["baro"], mag=sections["mag"], gnss=sections["gnss"],
-                      disturbances=dists, setpoints=sps, source=self.source, draws=self.draws)
+                      disturbances=dists, setpoints=sps, source=self.source, draws=self.draws,
+                      fc_params=[Section(self.table(f"fc_param[{i}].", e, S.FC_PARAM))
+                                 for i, e in enumerate(self.array("fc_param"))])
         self.check_consistency(sc)
         return sc
 
@@ -366,3 +375,12 @@ class _Resolver:
             if sp.start_s >= sc.duration_s:
                 self.fail(f"setpoint[{i}].start_s", f"{sp.start_s:g} s is not before the end "
                                                      f"of the run ({sc.duration_s:g} s)")
+        for i, fp in enumerate(sc.fc_params):
+            if fp.at_s >= sc.duration_s:
+                self.fail(f"fc_param[{i}].at_s", f"{fp.at_s:g} s is not before the end "
+                                                  f"of the run ({sc.duration_s:g} s)")
+            if self.check_fc_param is not None:
+                try:
+                    self.check_fc_param(fp.name, fp.value)
+                except ValueError as exc:
+                    self.fail(f"fc_param[{i}]", str(exc))

@@ -206,3 +206,14 @@ SETPOINT_TYPES = {
         "ramp_s": F("float", 0.0, min=0, unit="s"),
     },
 }
+
+# [[fc_param]] entries: set one flight-controller parameter at a sim time. The bridge
+# does not know the FC's parameters (bridge/ and fc_sil/ never import each other): the
+# caller that joins the two (tools/loop/fc_param_events.py) checks name and value against
+# the FC's declaration at load time, and hands the schedule to the FC, which applies it.
+FC_PARAM = {
+    "name": F("str", text="FC parameter name, e.g. SB_ATT_SRC (`silbridge params list`)"),
+    "value": F("float", text="new value, within the parameter's declared range"),
+    "at_s": F("float", min=0, drawable=True, unit="s",
+              text="sim time; applied after the first physics step that ends at or after it"),
+}

@@ -93,10 +93,13 @@ class FcLoop:
     `_poll_c` over the shared-memory segment (unless a sink wants each cycle's arrays)
     and `_poll_py` otherwise; both keep the same counters and statistics."""
 
-    def __init__(self, core, segment, *, supervisor=None, sink=None, batch: int = 8192):
+    def __init__(self, core, segment, *, supervisor=None, sink=None, batch: int = 8192,
+                 schedule=None):
         self.core = core
         self.seg = segment
         self.supervisor = supervisor
+        # Timed parameter changes (fc_sil/param_schedule.py), or None.
+        self.schedule = schedule
         self._sink = None
         self._tick = None
         self.buf = np.zeros(batch, dtype=RECORD_DTYPE)
@@ -196,6 +199,8 @@ class FcLoop:
     def _poll_c(self) -> int:
         n = self._cpoll()
         if n:
+            if self.schedule is not None:
+                self.schedule.after_batch(self)
             if self._flush is not None:
                 self._flush_in -= 1
                 if self._flush_in <= 0:
@@ -243,6 +248,8 @@ class FcLoop:
             sink = None
         else:
             sink = self._sink
+        if self.schedule is not None:
+            self.schedule.after_batch(self)
         if sink is not None or self.supervisor is not None:
             if n < _SMALL and k < _SMALL:
                 recs, pwm, status = self._recs[n], self._pwms[k], self._stats[k]

@@ -88,3 +88,16 @@ def test_table_cells_never_show_a_negative_zero():
     assert _cell({"mean": -0.0003, "std": 0.0004}, "{:.2f}") == "0.00 ± 0.00"
     assert _cell({"mean": -0.3, "std": 0.1}, "{:.2f}") == "-0.30 ± 0.10"
     assert _cell(None, "{:.2f}") == "n/a"
+
+
+def test_blend_ablation_on_a4_switches_the_source_in_flight(tmp_path):
+    # A4 switches SB_ATT_SRC to ground truth at 25 s: score 24-27 s, blend on and off.
+    windows = ((0.0, 10.0), (10.0, 24.0), (24.0, 27.0), (25.0, 27.0))
+    specs = []
+    for label, off in (("full", ()), ("no_blend", ("blend",))):
+        specs += make_specs(["A4"], 1, 27.0, tmp_path, features_off=off, variant=label,
+                            windows=windows)
+    full, no_blend = run_campaign(specs, jobs=1, progress=False)
+    assert full.summary["trace_hash"] != no_blend.summary["trace_hash"]
+    # The hard switch is a step of the attitude error: the motors see it.
+    assert no_blend.metrics["pwm_pp_us"] > full.metrics["pwm_pp_us"]

@@ -32,6 +32,7 @@ from contextlib import ExitStack
 from dataclasses import dataclass
 from typing import Callable
 
+from silbridge.bridge.errors import ScenarioError
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 
@@ -100,6 +101,11 @@ def log_tail(path: str, lines: int = 8) -> str:
 def scenario_factory(scenario: str, seed, imu_hz):
     """(the scenario, a maker of its simulator): the physics wrappers build the simulator."""
     sc = load_scenario(scenario, seed=seed)
+    if sc.fc_params:
+        # [[fc_param]] names our FC's parameters; an autopilot has its own.
+        raise ScenarioError(f"scenario {sc.name}: its [[fc_param]] entries set silbridge's FC "
+                            "parameters, which ArduCopter and PX4 do not have; fly it with "
+                            "--fc ours, or use a scenario without [[fc_param]]")
     return sc, (lambda: Simulator(sc, imu_hz=imu_hz))
 
 

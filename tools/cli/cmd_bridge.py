@@ -7,6 +7,7 @@ import sys
 
 from silbridge.bridge.runner_main import prepare_segment, run_bridge
 
+from silbridge.tools.loop.fc_param_events import param_at_args, param_events
 from silbridge.tools.loop.flight import segment_unlinker, bridge_config, make_simulator, summarise
 from silbridge.tools.loop.stop_signals import STOP
 from silbridge.tools.loop.transport_wiring import bridge_address, bridge_segment
@@ -37,15 +38,17 @@ def run(args) -> int:
     out = (lambda s: print(s, file=sys.stderr)) if args.json else print
     sc, sim = make_simulator(opts)
     cfg = bridge_config(opts, sc)
+    # The scenario's [[fc_param]] changes are the FC's to make: say how to hand them over.
+    timed = "".join(f" {a}" for a in param_at_args(param_events(sc)))
     with bridge_segment(opts.transport, opts.instance, sim, hil_addr=opts.hil_addr) as seg:
         prepare_segment(seg, sim, cfg)
         if opts.transport == "shm":
             out(f"bridge: segment '{opts.instance}' ready; start `silbridge fc --instance "
-                f"{opts.instance}`")
+                f"{opts.instance}{timed}`")
         else:
             out(f"bridge: MAVLink HIL on {opts.transport} {bridge_address(seg)}; start "
-                f"`silbridge fc --transport {opts.transport} --hil-addr {bridge_address(seg)}` "
-                f"(or a PX4 SITL / HIL autopilot)")
+                f"`silbridge fc --transport {opts.transport} --hil-addr {bridge_address(seg)}"
+                f"{timed}` (or a PX4 SITL / HIL autopilot)")
         with STOP.polling(), STOP.emergency(segment_unlinker(seg)):
             res = run_bridge(sim, seg, cfg, out=out, stop=STOP)
     summary = summarise(opts, sc, sim, res, {})

@@ -28,6 +28,9 @@ def add_arguments(p) -> None:
                    help="wait this long for the bridge's segment (default 10 s)")
     add_transport_arguments(p, listen=False)
     add_fc_arguments(p)
+    p.add_argument("--param-at", action="append", default=[], metavar="NAME=VALUE@S",
+                   help="set an FC parameter at a sim time (repeatable), e.g. SB_ATT_SRC=1@40; "
+                        "`fly` passes a scenario's [[fc_param]] entries this way")
     add_mavlink_arguments(p)
     p.add_argument("--log", default=None, metavar="FILE.mcap",
                    help="write the run's MCAP log from the FC side")
@@ -40,7 +43,16 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from silbridge.fc_sil.runtime import run_fc
 
+    from silbridge.fc_sil.param_schedule import parse_param_at
+    from silbridge.tools.loop.fc_param_events import check_fc_param
+
     params = parse_params(args.param)
+    try:
+        events = [parse_param_at(text) for text in args.param_at]
+        for ev in events:
+            check_fc_param(ev.name, ev.value)
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
     out = (lambda s: print(s, file=sys.stderr)) if args.json else print
     from silbridge.shm import lockstep as ls
 
@@ -56,7 +68,7 @@ def run(args) -> int:
             raise OptionError("--tlog logs the MAVLink GCS traffic: fly the MAVLink vehicle "
                               "(--mavlink) or leave --tlog out")
         loop = make_fc_loop(seg, params=params, features_off=tuple(args.feature_off),
-                            mavlink=mav_opts, out=out)
+                            mavlink=mav_opts, out=out, param_events=events)
         guard_fc(loop)
         sink = _open_log(args, loop)
         summary = None

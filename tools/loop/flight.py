@@ -17,9 +17,9 @@ import tempfile
 from dataclasses import dataclass
 
 from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
-from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 
+from silbridge.tools.loop.fc_param_events import load_flight_scenario, param_at_args, param_events
 from silbridge.tools.loop.stop_signals import STOP
 from silbridge.tools.loop.transport_wiring import (
     bridge_address,
@@ -64,7 +64,7 @@ def default_instance() -> str:
 
 
 def make_simulator(opts: FlightOptions):
-    sc = load_scenario(opts.scenario, seed=opts.seed)
+    sc = load_flight_scenario(opts.scenario, seed=opts.seed)
     sim = Simulator(sc, imu_hz=opts.imu_hz)
     return sc, sim
 
@@ -77,27 +77,33 @@ def bridge_config(opts: FlightOptions, sc) -> BridgeRunConfig:
 
 
 def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
-                 mavlink=None, out=None):
+                 mavlink=None, out=None, param_events=()):
     """The FC side: FlightCore with parameters applied, wrapped in an FcLoop.
+
+    param_events: fc_sil.param_schedule.ParamEvent changes due at sim times (a scenario's
+    [[fc_param]] entries).
 
     mavlink: None for the pre-MAVLink AutoFlight (scenario setpoints, auto-arm), or a
     fc_sil.vehicle_server.MavlinkOptions: the MAVLink vehicle (disarmed, GCS control only);
     close it with close_fc_loop(loop)."""
     from silbridge.fc_sil.autoflight import AutoFlight
     from silbridge.fc_sil.flight_core import FlightCore
+    from silbridge.fc_sil.param_schedule import ParamSchedule
     from silbridge.fc_sil.runtime import FcLoop
 
     from silbridge.tools.benchmark.ablation import feature_params
 
     core = FlightCore()
     overrides = {**(params or {}), **feature_params(features_off)}
+    schedule = ParamSchedule(core, param_events) if param_events else None
     if mavlink is not None:
         from silbridge.fc_sil.vehicle_server import start_mavlink_vehicle
         vehicle = start_mavlink_vehicle(core, mavlink, overrides=overrides, sink=sink, out=out)
-        return FcLoop(core, seg, supervisor=vehicle, sink=sink)
+        return FcLoop(core, seg, supervisor=vehicle, sink=sink, schedule=schedule)
     for name, value in overrides.items():
         core.set_param(name, value)
-    return FcLoop(core, seg, supervisor=AutoFlight(core, sink=sink), sink=sink)
+    return FcLoop(core, seg, supervisor=AutoFlight(core, sink=sink), sink=sink,
+                  schedule=schedule)
 
 
 def mavlink_options(opts: FlightOptions):
@@ -175,7 +181,8 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
         fc_addr = None if opts.transport == "shm" else bridge_address(seg)
         with fc_segment(opts.transport, name, hil_addr=fc_addr, wait_config=False) as fc_seg:
             fc = make_fc_loop(fc_seg, params=opts.params, features_off=opts.features_off,
-                              mavlink=mavlink_options(opts), out=out)
+                              mavlink=mavlink_options(opts), out=out,
+                              param_events=param_events(sc))
             guard_fc(fc)
             if opts.log_path or opts.live is not None:
                 from silbridge.tools.loop.run_log import open_run_sink
@@ -243,6 +250,7 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
             cmd += ["--param", f"{pname}={value}"]
         for feature in opts.features_off:
             cmd += ["--feature-off", feature]
+        cmd += param_at_args(param_events(sc))
         cmd += mavlink_cli_args(opts)
         meta_path = None
         if opts.log_path or opts.live is not None:
