@@ -45,6 +45,9 @@ float fc_sched_weight(float w, float demand, float release_s, float dt_s)
 /* a at w = 0, b at w = 1, the same ratio per step of w between. */
 static float geometric_blend(float a, float b, float w)
 {
+    if (w == 0.0f) {
+        return a;           /* exactly a * powf(b / a, 0): no powf at the quiet gains */
+    }
     if (!(a > 0.0f) || !(b > 0.0f)) {
         return (w < 0.5f) ? a : b;
     }
@@ -87,6 +90,9 @@ void fc_aid_sched_reset(fc_aid_sched_t *s)
     s->have_prev = false;
     s->noise_sum = 0.0f;
     s->noise_wsum = 0.0f;
+    s->sigma_rad = 0.0f;
+    s->lp_dt_s = -1.0f;
+    s->lp_alpha = 0.0f;
     s->w = 0.0f;
     s->scale = 1.0f;
 }
@@ -109,6 +115,8 @@ void fc_aid_sched_fix(fc_aid_sched_t *s, const float err_ned_rad[3], float fix_d
         const float b = fc_ema_alpha(fix_dt_s, FC_AID_NOISE_TC_S);
         s->noise_sum += b * (v_mean - s->noise_sum);
         s->noise_wsum += b * (1.0f - s->noise_wsum);
+        /* noise_sum / noise_wsum: the EMA without its start-up bias towards 0. */
+        s->sigma_rad = (s->noise_wsum > 0.0f) ? sqrtf(s->noise_sum / s->noise_wsum) : 0.0f;
     }
     s->prev_rad[0] = err_ned_rad[0];
     s->prev_rad[1] = err_ned_rad[1];
@@ -118,13 +126,16 @@ void fc_aid_sched_fix(fc_aid_sched_t *s, const float err_ned_rad[3], float fix_d
 float fc_aid_sched_step(fc_aid_sched_t *s, const fc_aid_sched_config_t *cfg,
                         const float err_ned_rad[3], float dt_s)
 {
-    const float a = fc_ema_alpha(dt_s, FC_AID_LP_TC_S);
+    /* Per IMU sample: the period is nearly always the same, so its expf is kept. */
+    if (dt_s != s->lp_dt_s) {
+        s->lp_dt_s = dt_s;
+        s->lp_alpha = fc_ema_alpha(dt_s, FC_AID_LP_TC_S);
+    }
+    const float a = s->lp_alpha;
     for (int i = 0; i < 2; i++) {
         s->innov_lp_rad[i] += a * (err_ned_rad[i] - s->innov_lp_rad[i]);
     }
-    /* noise_sum / noise_wsum: the EMA without its start-up bias towards 0. */
-    const float sigma = (s->noise_wsum > 0.0f) ? sqrtf(s->noise_sum / s->noise_wsum) : 0.0f;
-    const float thr = fmaxf(FC_AID_FLOOR_RAD, cfg->innov_sigma * sigma);
+    const float thr = fmaxf(FC_AID_FLOOR_RAD, cfg->innov_sigma * s->sigma_rad);
     const float mag = sqrtf(fc_sq(s->innov_lp_rad[0]) + fc_sq(s->innov_lp_rad[1]));
     /* Smooth: from no boost at the threshold to the full one at twice it. */
     const float demand = mag / thr - 1.0f;

@@ -76,6 +76,9 @@ typedef struct fc_aid_sched {
     bool have_prev;
     float noise_sum;       /* EMA of the mean's noise variance (bias-corrected by wsum) */
     float noise_wsum;      /* EMA of 1 with the same weights */
+    float sigma_rad;       /* noise sigma of the mean, sqrt(sum / wsum), per fix [rad] */
+    float lp_dt_s;         /* the step period lp_alpha was computed for [s] */
+    float lp_alpha;        /* low-pass weight per step: one expf per period change */
     float w;               /* 0 = configured gains, 1 = boosted by `boost` */
     float scale;           /* bandwidth factor in use, 1..boost */
 } fc_aid_sched_t;
