@@ -52,3 +52,25 @@ def test_the_second_signal_runs_the_cleanups_and_exits_at_once():
     assert p.returncode == 130
     assert p.stdout.splitlines() == ["first: flag True", "cleanup ran"]
     assert "SIGINT again: exit now" in p.stderr
+
+
+def test_a_campaign_run_whose_start_up_the_stop_broke_counts_as_never_begun(monkeypatch, tmp_path):
+    """Native code (JSBSim's model loader) can turn the stop's KeyboardInterrupt into a
+    SystemError: with the stop requested that is a run that never began, not a failure;
+    without one the error stands."""
+    from silbridge.tools.benchmark import campaign
+    from silbridge.tools.loop import stop_signals
+
+    spec = campaign.make_specs(["S1"], 1, 1.0, tmp_path)[0]
+
+    def broken(_spec):
+        raise SystemError("load_model returned a result with an exception set")
+
+    monkeypatch.setattr(campaign, "_fly_and_score", broken)
+    stop = StopRequest()
+    monkeypatch.setattr(stop_signals, "STOP", stop)
+    with pytest.raises(SystemError):
+        campaign.run_one(spec)
+    with stop.polling():
+        stop.request(signal.SIGINT)
+    assert campaign.run_one(spec).summary == {"interrupted": "SIGINT", "skipped": True}

@@ -84,11 +84,24 @@ def make_specs(scenarios, runs: int, duration_s: float, out_dir: Path, *, base_s
 
 def run_one(spec: RunSpec) -> RunResult:
     """Fly one run in this process, log it, and compute its metrics from the log."""
-    from silbridge.tools.loop.flight import FlightOptions, fly_one_process
     from silbridge.tools.loop.stop_signals import STOP
 
     if STOP.requested:   # queued before the stop reached this worker: never started
         return RunResult(spec=spec, summary={"interrupted": STOP.name, "skipped": True})
+    try:
+        return _fly_and_score(spec)
+    except Exception:
+        # A stop that arrives during start-up (nothing polls yet) raises KeyboardInterrupt
+        # where the worker is; native code such as JSBSim's model loader can turn that into
+        # another exception (SystemError). Either way the run never began.
+        if STOP.requested:
+            return RunResult(spec=spec, summary={"interrupted": STOP.name, "skipped": True})
+        raise
+
+
+def _fly_and_score(spec: RunSpec) -> RunResult:
+    from silbridge.tools.loop.flight import FlightOptions, fly_one_process
+
     Path(spec.log_path).parent.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     if spec.fc == "ardupilot":
