@@ -43,6 +43,7 @@ import numpy as np
 from silbridge.shm.records import PWM_DTYPE, RECORD_SIZE, Kind
 
 from . import ardupilot_json as apj
+from ._step import json_reply as _json_reply
 
 _NS = 1_000_000_000
 # Payload readers (shm/include/sb_records.h; payload after the 24-byte header). struct on
@@ -65,6 +66,37 @@ def euler_from_quat(w: float, x: float, y: float, z: float) -> tuple[float, floa
     pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
     yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
     return roll, pitch, yaw
+
+
+def reply_line(raw: bytes, sim_ns: int) -> bytes:
+    """The reply line of a step's record bytes (IMU*, GT_ATT, GT_NAV): the readable
+    reference of the C `_step.json_reply` the hot path calls (same bytes; tests hold it)."""
+    # Contract order: the step's IMU samples first, then GT_ATT, then GT_NAV.
+    n = off = 0
+    a0 = a1 = a2 = g0 = g1 = g2 = 0.0
+    while _KIND.unpack_from(raw, off)[0] == _IMU_KIND:
+        x0, x1, x2, y0, y1, y2 = _IMU.unpack_from(raw, off)
+        a0 += x0
+        a1 += x1
+        a2 += x2
+        g0 += y0
+        g1 += y1
+        g2 += y2
+        n += 1
+        off += RECORD_SIZE
+    if _KIND.unpack_from(raw, off)[0] != _GT_ATT_KIND or \
+            _KIND.unpack_from(raw, off + RECORD_SIZE)[0] != _GT_NAV_KIND:
+        raise RuntimeError("Simulator.step records out of contract order (IMU*, GT_ATT, "
+                           "GT_NAV): bridge/simulator.py and this reader disagree")
+    att = _GT_ATT.unpack_from(raw, off)
+    nav = _GT_NAV.unpack_from(raw, off + RECORD_SIZE)
+    if n:
+        k = 1.0 / n
+        imu = (g0 * k, g1 * k, g2 * k, a0 * k, a1 * k, a2 * k)
+    else:   # an IMU slower than the physics: truth this step (its sample comes later)
+        imu = (*att[4:7], *att[7:10])
+    return apj.encode_values((sim_ns / _NS, *imu, *nav[0:3], *euler_from_quat(*att[0:4]),
+                              *att[0:4], *nav[3:6]))
 
 
 class ArduPilotPhysics:
@@ -139,33 +171,9 @@ class ArduPilotPhysics:
         applied_ns = sim.sim_ns
         recs = sim.step(motors)
         self.steps += 1
-        raw = recs.tobytes()
-        # Contract order: the step's IMU samples first, then GT_ATT, then GT_NAV.
-        n = off = 0
-        a0 = a1 = a2 = g0 = g1 = g2 = 0.0
-        while _KIND.unpack_from(raw, off)[0] == _IMU_KIND:
-            x0, x1, x2, y0, y1, y2 = _IMU.unpack_from(raw, off)
-            a0 += x0
-            a1 += x1
-            a2 += x2
-            g0 += y0
-            g1 += y1
-            g2 += y2
-            n += 1
-            off += RECORD_SIZE
-        if _KIND.unpack_from(raw, off)[0] != _GT_ATT_KIND or \
-                _KIND.unpack_from(raw, off + RECORD_SIZE)[0] != _GT_NAV_KIND:
-            raise RuntimeError("Simulator.step records out of contract order (IMU*, GT_ATT, "
-                               "GT_NAV): bridge/simulator.py and this reader disagree")
-        att = _GT_ATT.unpack_from(raw, off)
-        nav = _GT_NAV.unpack_from(raw, off + RECORD_SIZE)
-        if n:
-            k = 1.0 / n
-            imu = (g0 * k, g1 * k, g2 * k, a0 * k, a1 * k, a2 * k)
-        else:   # an IMU slower than the physics: truth this step (its sample comes later)
-            imu = (*att[4:7], *att[7:10])
-        reply = apj.encode_values((sim.sim_ns / _NS, *imu, *nav[0:3],
-                                   *euler_from_quat(*att[0:4]), *att[0:4], *nav[3:6]))
+        reply = _json_reply(recs, sim.sim_ns)
+        if reply is None:
+            reply = reply_line(recs.tobytes(), sim.sim_ns)   # raises, saying which value
         if self.sink is not None:
             m0, m1, m2, m3 = motors
             _PWM.pack_into(self._pwm_buf, 0, _PWM_KIND, 0, self.steps - 1, applied_ns,

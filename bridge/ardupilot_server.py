@@ -20,10 +20,10 @@ from dataclasses import dataclass, field
 
 from .ardupilot_json import ArduPilotProtocolError
 from .runner_errors import BridgeError
+from .link_spin import spin_poll
 from .serve_loop import ServeResult, ended_by, stop_asked
 
 _NS = 1_000_000_000
-SPIN_US = 0.0   # see JsonPhysicsServer.serve
 
 
 class SitlLost(BridgeError):
@@ -72,36 +72,35 @@ class JsonPhysicsServer:
 
     def serve(self, duration_s: float, *, connect_timeout_s: float = 120.0,
               idle_timeout_s: float = 10.0, stop=None, poll_s: float = 0.2,
-              spin_us: float | None = None) -> JsonRunResult:
+              spin_us: float = 0.0) -> JsonRunResult:
         """Answer servo packets until duration_s of sim time; see the module text.
 
         spin_us: after each reply, poll the socket without sleeping for up to this long
-        before blocking (default SPIN_US). SITL answers within some tens of microseconds;
-        a blocked receiver pays a wake-up per packet, which on a VM costs as much as the
-        physics step. 0 blocks at once (the polite choice on a machine short of cores).
+        before sleeping in select() (bridge/link_spin.py says when that pays; 0, the
+        default, sleeps at once).
         """
         phys = self.physics
         sock = self.sock
         sock.setblocking(False)     # recvfrom never sleeps; select() does the waiting
-        spin_ns = int((SPIN_US if spin_us is None else spin_us) * 1000)
+        spin_ns = int(spin_us * 1000)
         recv = sock.recvfrom
+
+        def poll():
+            try:
+                return recv(512)
+            except BlockingIOError:
+                return None
+
         mono_ns = time.monotonic_ns
         end_ns = int(round(duration_s * _NS))
         t0 = time.monotonic()
         last_rx = None
         stopped_by = "duration"
         while phys.sim.sim_ns < end_ns:
-            try:
-                data, src = recv(512)
-            except BlockingIOError:
-                data = None
-                if spin_ns and last_rx is not None:
-                    give_up = mono_ns() + spin_ns
-                    while data is None and mono_ns() < give_up:
-                        try:
-                            data, src = recv(512)
-                        except BlockingIOError:
-                            pass
+            got = spin_poll(poll, spin_ns if last_rx is not None else 0)
+            data = None
+            if got is not None:
+                data, src = got
             if data is None:
                 if select.select([sock], [], [], poll_s)[0]:
                     continue

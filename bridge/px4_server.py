@@ -31,6 +31,7 @@ from silbridge.mavlink.hil.hil_channel import HilListener
 from silbridge.mavlink.hil.hil_errors import HilPeerLost
 from silbridge.mavlink.hil.px4_hil import CMD_SET_MESSAGE_INTERVAL
 
+from .link_spin import spin_poll
 from .runner_errors import PeerLost, StartupCheckFailed
 from .serve_loop import ServeResult, ended_by, stop_asked
 
@@ -106,8 +107,12 @@ class Px4HilServer:
             raise PeerLost(f"PX4 went away: {e}") from None
 
     def serve(self, duration_s: float, *, realtime: bool = False, connect_timeout_s: float = 60.0,
-              stall_s: float = 2.0, idle_timeout_s: float = 10.0, stop=None) -> Px4RunResult:
+              stall_s: float = 2.0, idle_timeout_s: float = 10.0, stop=None,
+              spin_us: float = 0.0) -> Px4RunResult:
+        """spin_us: in lockstep, poll for PX4's reply without sleeping for up to this long
+        before sleeping in select() (bridge/link_spin.py says when that pays; 0 sleeps at once)."""
         phys = self.physics
+        spin_ns = int(spin_us * 1000)
         t0 = time.monotonic()
         self._accept(connect_timeout_s, stop)
         end_ns = int(round(duration_s * _NS))
@@ -124,7 +129,10 @@ class Px4HilServer:
                                     else step_wall))
             else:
                 wait = 0.0 if pending else min(stall_s, 0.05)
-            msgs = ch.receive(wait)
+            if wait > 0 and spin_ns and not realtime and phys.first_reply_us is not None:
+                msgs = spin_poll(lambda: ch.receive(0) or None, spin_ns) or ch.receive(wait)
+            else:
+                msgs = ch.receive(wait)
             rx_ns = time.monotonic_ns()
             if msgs:
                 last_rx = time.monotonic()

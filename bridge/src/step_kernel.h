@@ -136,4 +136,7 @@ PyObject *Kernel_set_mag_block(Kernel *self, PyObject *arr);
 PyObject *Kernel_set_forces(Kernel *self, PyObject *plan);
 extern PyGetSetDef sb_step_getset[];
 
+/* step_json.c: the module-level json_reply (ArduPilot SITL's JSON state line). */
+extern PyMethodDef sb_step_json_methods[];
+
 #endif /* SB_STEP_KERNEL_H */

@@ -245,7 +245,7 @@ static PyTypeObject KernelType = {
 };
 
 static struct PyModuleDef stepmodule = {
-    PyModuleDef_HEAD_INIT, "_step", "The bridge's per-step C kernel", -1, NULL,
+    PyModuleDef_HEAD_INIT, "_step", "The bridge's per-step C kernel", -1, sb_step_json_methods,
     NULL, NULL, NULL, NULL};
 
 PyMODINIT_FUNC PyInit__step(void)

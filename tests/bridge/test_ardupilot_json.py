@@ -4,7 +4,8 @@ The fake sends servo packets over real UDP to a real JsonPhysicsServer (real
 JSBSim behind it) and reads the replies the way SITL's parser does (strstr for
 the key, the value right after `"key":`), so a reply SITL could not read fails
 here. Covered: fields, units and frames at rest and in a climb, framing,
-lockstep (one step per new frame, none for a resend), drops, reset when SITL
+lockstep (one step per new frame, none for a resend; with the server sleeping or
+spinning between packets), drops, reset when SITL
 restarts (timestamp goes back), 32-channel packets, and refusal of a wrong
 magic with a message that says what to check.
 """
@@ -73,9 +74,10 @@ class FakeSitl:
         self.sock.close()
 
 
-@pytest.fixture
-def link():
-    """A served ArduPilotPhysics on an ephemeral port and a FakeSitl talking to it."""
+@pytest.fixture(params=[0.0, 500.0], ids=["sleeping", "spinning"])
+def link(request):
+    """A served ArduPilotPhysics on an ephemeral port and a FakeSitl talking to it; the
+    server sleeps in select() between packets, or spins first (bridge/link_spin.py)."""
     sc = load_scenario("S1")
     notes = []
     phys = ArduPilotPhysics(lambda: Simulator(sc), note=notes.append)
@@ -85,7 +87,8 @@ def link():
 
     def serve():
         try:
-            box["result"] = server.serve(1e6, stop=done.is_set, poll_s=0.02)
+            box["result"] = server.serve(1e6, stop=done.is_set, poll_s=0.02,
+                                         spin_us=request.param)
         except Exception as e:   # handed to the test thread
             box["error"] = e
 

@@ -101,8 +101,10 @@ def serve_bridge(scenario: str, *, seed=None, imu_hz=None, duration_s=None,
 
 def fly_ardupilot(*, scenario: str, seed, duration_s: float, log_path: str, binary: str,
                   imu_hz=None, params: dict | None = None, speedup: float = 50.0,
-                  boot_budget_s: float = BOOT_BUDGET_S, keep_dir: bool = False) -> dict:
-    """One ArduCopter run: boot, arm, take off, hold for duration_s; log from take-off."""
+                  boot_budget_s: float = BOOT_BUDGET_S, keep_dir: bool = False,
+                  spin_us: float = 0.0) -> dict:
+    """One ArduCopter run: boot, arm, take off, hold for duration_s; log from take-off.
+    spin_us: the JSON link's spin budget (bridge/link_spin.py; campaigns choose it)."""
     sc, make_sim = scenario_factory(scenario, seed, imu_hz)
     target = AttitudeTarget()
     feed = TargetFeed()
@@ -133,7 +135,8 @@ def fly_ardupilot(*, scenario: str, seed, duration_s: float, log_path: str, bina
                    home=sc.home, defaults_path=defaults_path)
         driver.start()
         res = server.serve(boot_budget_s + duration_s,
-                           stop=run.stop_when(lambda: sink.done, driver), connect_timeout_s=60.0)
+                           stop=run.stop_when(lambda: sink.done, driver), connect_timeout_s=60.0,
+                           spin_us=spin_us)
         run.raise_if_failed(sink, driver, boot_budget_s, mode=f"{driver.mode}")
     finally:
         run.close(driver, server)

@@ -25,7 +25,9 @@ The JSON runs also give a profile per servo packet (median and mean, us):
 `ours` = packet arrival -> reply sent (decode, physics step, encode, and the
 log in the bench run); `sitl` = reply sent -> next packet arrival (SITL's
 frame plus both UDP hops and the wake-ups). Ratios: json_idle / reference and
-bench / reference. Measure under the shared lock: `flock /work/heavy.lock ...`.
+bench / reference. Our server spins on the link as a lone campaign run does
+(bridge/link_spin.py: when this process has two cores or more). Measure under the
+shared lock: `flock /work/heavy.lock ...`.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ from silbridge.bridge import ardupilot_json as apj
 from silbridge.bridge.ardupilot_json import sitl_port
 from silbridge.bridge.ardupilot_physics import ArduPilotPhysics
 from silbridge.bridge.ardupilot_server import JsonPhysicsServer
+from silbridge.bridge.link_spin import spin_budget_us
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 
@@ -209,7 +212,8 @@ def _profile(rows, skip_s: float, span_s: float) -> dict:
 def _serve_json(binary: str, sc, phys, defaults_sim, physics_hz: float, duration_s: float,
                 spin_us: float | None = None) -> None:
     """SITL at --speedup 1000 on phys over JSON for duration_s of sim time (its defaults
-    from defaults_sim at physics_hz)."""
+    from defaults_sim at physics_hz). spin_us None: a lone run's budget (bridge/link_spin.py)."""
+    spin_us = spin_budget_us(1) if spin_us is None else spin_us
     run, defaults = _run_with_defaults(defaults_sim, physics_hz)
     reader = ClockReader(run.instance)
     server = None
@@ -230,8 +234,9 @@ def measure_json_idle(binary: str, *, skip_s: float, span_s: float,
     phys = ArduPilotPhysics(lambda: Simulator(sc))
     prof = phys.sink = _Profile(phys)
     _serve_json(binary, sc, phys, phys.sim, phys.physics_hz, skip_s + span_s, spin_us)
-    return _profile(prof.rows, skip_s, span_s) | {"model": "JSON", "speedup": 1000,
-                                                   "spin_us": spin_us}
+    return _profile(prof.rows, skip_s, span_s) | {
+        "model": "JSON", "speedup": 1000,
+        "spin_us": spin_budget_us(1) if spin_us is None else spin_us}
 
 
 class _Clock:
@@ -267,7 +272,7 @@ class _NoPhysics:
 def measure_json_floor(binary: str, *, skip_s: float, span_s: float) -> dict:
     sc = load_scenario("S1")
     phys = _NoPhysics()
-    _serve_json(binary, sc, phys, Simulator(sc), 1000.0, skip_s + span_s)
+    _serve_json(binary, sc, phys, Simulator(sc), 1000.0, skip_s + span_s, spin_budget_us(1))
     return _profile(phys.rows, skip_s, span_s) | {"model": "JSON, no physics"}
 
 
@@ -276,7 +281,8 @@ def measure_bench(binary: str, *, flight_s: float) -> dict:
     out = tempfile.mkdtemp(prefix="silbridge-speed-bench-")
     try:
         s = fly_ardupilot(scenario="S1", seed=1, duration_s=flight_s,
-                          log_path=os.path.join(out, "s1.mcap"), binary=binary, speedup=1000)
+                          log_path=os.path.join(out, "s1.mcap"), binary=binary, speedup=1000,
+                          spin_us=spin_budget_us(1))
     finally:
         shutil.rmtree(out, ignore_errors=True)
     return {"realtime_factor": s["sim_s_total"] / max(s["wall_total_s"], 1e-9),

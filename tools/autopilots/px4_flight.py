@@ -58,8 +58,10 @@ def serve_px4(scenario: str, *, seed=None, imu_hz=None, duration_s=None, realtim
 
 def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: str, etc: str,
             imu_hz=None, params: dict | None = None, realtime: bool = False,
-            boot_budget_s: float = BOOT_BUDGET_S, keep_dir: bool = False) -> dict:
-    """One PX4 run: boot, arm, take off, OFFBOARD for duration_s; log from take-off."""
+            boot_budget_s: float = BOOT_BUDGET_S, keep_dir: bool = False,
+            spin_us: float = 0.0) -> dict:
+    """One PX4 run: boot, arm, take off, OFFBOARD for duration_s; log from take-off.
+    spin_us: the lockstep link's spin budget (bridge/link_spin.py; campaigns choose it)."""
     sc, make_sim = scenario_factory(scenario, seed, imu_hz)
     target = AttitudeTarget()
     feed = TargetFeed()
@@ -85,7 +87,7 @@ def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: st
         driver.start()
         res = server.serve(boot_budget_s + duration_s, realtime=realtime,
                            stop=run.stop_when(lambda: sink.done, driver),
-                           connect_timeout_s=30.0)
+                           connect_timeout_s=30.0, spin_us=spin_us)
         run.raise_if_failed(sink, driver, boot_budget_s,
                             mode=f"{driver.main_mode}/{driver.sub_mode}")
     finally:

@@ -26,6 +26,7 @@ import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
+from silbridge.bridge.link_spin import spin_budget_us
 from silbridge.bridge.px4_physics import Px4Physics
 from silbridge.bridge.px4_server import Px4HilServer
 from silbridge.bridge.scenario import load_scenario
@@ -108,7 +109,7 @@ def measure(binary: str, etc: str, *, ours: bool, warmup_s: float, window_s: flo
             server = Px4HilServer(phys, ("127.0.0.1", sp.SIM_TCP_BASE + n))
             run.launch(sp.start_px4, binary, etc, n, work, params=sp.px4_params(phys.sim, sc))
             server.serve(1e6, stop=run.stop_when(lambda: probe.done(warmup_s, window_s)),
-                         connect_timeout_s=30.0)
+                         connect_timeout_s=30.0, spin_us=spin_budget_us(1))
         else:
             run.launch(sp.start_px4, binary, etc, n, work, params={}, speed_factor=sih_factor,
                        autostart=SIH_AIRFRAME)

@@ -20,9 +20,11 @@ import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from multiprocessing import get_context
 from pathlib import Path
+
+from silbridge.bridge.link_spin import spin_budget_us
 
 
 class CampaignError(Exception):
@@ -47,6 +49,7 @@ class RunSpec:
     sitl_speedup: float = 50.0    # fc == ardupilot: SITL --speedup
     viz_hz: float = 0.0           # the log's viewable channels (off in campaigns: their cost)
     px4: str | None = None        # fc == px4: the px4 SITL binary (etc/ beside its bin/)
+    link_spin_us: float = 0.0     # fc != ours: spin on the lockstep link (bridge/link_spin.py)
 
 
 @dataclass
@@ -109,7 +112,7 @@ def _fly_and_score(spec: RunSpec) -> RunResult:
         summary = fly_ardupilot(scenario=spec.scenario, seed=spec.seed,
                                 duration_s=spec.duration_s, log_path=spec.log_path,
                                 binary=spec.sitl, imu_hz=spec.imu_hz, params=dict(spec.params),
-                                speedup=spec.sitl_speedup)
+                                speedup=spec.sitl_speedup, spin_us=spec.link_spin_us)
         return _result_from_log(spec, summary, t0)
     if spec.fc == "px4":
         from silbridge.tools.autopilots.px4_flight import fly_px4
@@ -117,7 +120,7 @@ def _fly_and_score(spec: RunSpec) -> RunResult:
         binary, etc = find_px4(spec.px4)
         summary = fly_px4(scenario=spec.scenario, seed=spec.seed, duration_s=spec.duration_s,
                           log_path=spec.log_path, binary=binary, etc=etc, imu_hz=spec.imu_hz,
-                          params=dict(spec.params))
+                          params=dict(spec.params), spin_us=spec.link_spin_us)
         return _result_from_log(spec, summary, t0)
     opts = FlightOptions(scenario=spec.scenario, duration_s=spec.duration_s, lockstep=True,
                          processes=1, imu_hz=spec.imu_hz, seed=spec.seed,
@@ -205,6 +208,9 @@ def _run_local(specs, jobs: int, progress: bool, label: str) -> list[RunResult]:
     from silbridge.tools.loop.stop_signals import PARENT_STOP_SIGNAL, STOP
 
     bar = Progress(len(specs), label, progress)
+    # A foreign autopilot's lockstep link spins only where each concurrent run has two cores.
+    spin = spin_budget_us(min(jobs, len(specs)))
+    specs = [replace(s, link_spin_us=spin) if s.fc != "ours" else s for s in specs]
     if jobs <= 1:
         out = []
         with STOP.polling():

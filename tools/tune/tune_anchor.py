@@ -22,6 +22,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 from silbridge.bridge.ardupilot_json import sitl_port
 from silbridge.bridge.ardupilot_physics import ArduPilotPhysics
 from silbridge.bridge.ardupilot_server import JsonPhysicsServer
+from silbridge.bridge.link_spin import spin_budget_us
 
 from silbridge.tools.autopilots.ardupilot_log import AttitudeTarget
 from silbridge.tools.autopilots.autopilot_run import AutopilotRun, scenario_factory
@@ -166,7 +167,7 @@ def run_autotune(binary: str, *, axes_mask: int = 3, aggr: float = 0.1, scenario
                    home=sc.home, defaults_path=path)
         driver.start()
         server.serve(budget_sim_s, stop=run.stop_when(lambda: driver.done, driver),
-                     connect_timeout_s=60.0)
+                     connect_timeout_s=60.0, spin_us=spin_budget_us(1))   # one run at a time
         if driver.error:
             raise SitlError(f"{driver.error}; ArduCopter said: {' | '.join(driver.statustext)}")
         if not driver.done:
