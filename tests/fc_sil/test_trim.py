@@ -14,7 +14,7 @@ def run(trim, airborne_from, n, ex=0.1, ey=-0.2):
 
 
 def test_learns_the_mean_error_over_the_window_then_ramps_in():
-    out = run(B.HoverTrim(), airborne_from=500, n=6000)
+    out = run(B.HoverTrim(ramp=True), airborne_from=500, n=6000)   # the paper's ramp (off by default)
     assert np.all(out[:3500] == 0.0)                     # nothing until window + lift-off
     learned = np.array([80 * 0.1, 80 * -0.2])            # 80 us/rad times the mean error
     half = 500 + 3000 + 400                              # half way through the 0.8 s ramp

@@ -52,8 +52,8 @@ def test_ray_executor_matches_local(tmp_path):
 
 def test_ablation_variants_switch_real_parameters():
     labels = [v[0] for v in variants()]
-    assert labels[0] == "full" and labels[-1] == "all_off"
-    assert labels[1:-1] == [f"no_{f}" for f in ABLATION_FEATURES]
+    assert labels[0] == "full" and labels[-2:] == ["all_off", "defaults"]
+    assert labels[1:-2] == [f"no_{f}" for f in ABLATION_FEATURES]
     assert feature_params(["slew"]) == {"SB_SLEW_EN": 0}
     assert feature_params(["d_filter"]) == {"SB_DFILT_EN": 0}   # the documented names
     with pytest.raises(ValueError, match="unknown feature"):
@@ -61,7 +61,33 @@ def test_ablation_variants_switch_real_parameters():
     from silbridge.fc_sil.flight_core import FlightCore
     core = FlightCore()
     for name in FEATURES.values():
-        assert core.get_param(name) == 1   # every switch exists in the FC and defaults on
+        assert core.get_param(name) in (0, 1)   # every switch exists in the FC
+
+
+def test_ablation_full_is_the_papers_controller_whatever_the_defaults():
+    """`full` switches every paper feature on explicitly, `no_X` all but X, `all_off` none,
+    so the study shows what each feature pays even when the ablation has switched its
+    default off; `defaults` leaves the declared defaults alone."""
+    from silbridge.fc_sil.params import BY_NAME
+    paper = {FEATURES[f] for f in ABLATION_FEATURES}
+    off_by_default = {n for n in paper if BY_NAME[n].default == 0}
+    assert off_by_default   # the case this test is about: some defaults are off
+    v = dict(variants())
+    assert v["full"] == {n: 1 for n in paper}
+    assert v["all_off"] == {n: 0 for n in paper}
+    assert v["defaults"] == {}
+    for f in ABLATION_FEATURES:
+        assert v[f"no_{f}"] == {n: int(n != FEATURES[f]) for n in paper}
+    # What the FC flies: the variant's switches over the defaults, and over a --param.
+    from silbridge.fc_sil.flight_core import FlightCore
+    core = FlightCore()
+    assert {n for n in paper if core.get_param(n) == 0} == off_by_default
+    given = dict(variants([("SB_DFILT_EN", 0), ("ATC_RAT_RLL_D", 0.004)]))
+    assert given["full"]["SB_DFILT_EN"] == 1 and given["full"]["ATC_RAT_RLL_D"] == 0.004
+    assert given["defaults"] == {"SB_DFILT_EN": 0, "ATC_RAT_RLL_D": 0.004}
+    for name, value in given["full"].items():
+        core.set_param(name, value)
+    assert all(core.get_param(n) == 1 for n in paper)
 
 
 def test_bench_cli_json_shape(tmp_path):
