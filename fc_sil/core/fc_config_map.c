@@ -131,7 +131,7 @@ static void map_vertical_and_motors(const fc_params_t *p, fc_core_config_t *cfg)
     cfg->alt.acc_flte_hz = p->psc_accz_flte;
     cfg->alt.speed_up_m_s = p->pilot_speed_up * 0.01f; /* cm/s */
     cfg->alt.speed_dn_m_s =
-        ((p->pilot_speed_dn > 0.0f) ? p->pilot_speed_dn : p->pilot_speed_up) * 0.01f;
+        ((p->pilot_speed_dn > 0) ? p->pilot_speed_dn : p->pilot_speed_up) * 0.01f;
     cfg->alt.hover_throttle = p->mot_thst_hover;
     cfg->alt_sched.tc_s = p->sb_alt_tc;
     cfg->alt_sched.tc_hold_s = p->sb_alt_tc_hold;

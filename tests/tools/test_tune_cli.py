@@ -48,6 +48,7 @@ def test_tune_auto_tiny_budget_writes_a_parm_the_vehicle_loads(tmp_path, capsys)
         assert set(d[side]) == {"S1", "S4"}
         assert "pwm_pp_us" in d[side]["S1"] and "sat_pct" in d[side]["S4"]
     assert "ATC_RAT_RLL_P" in d["params"] and "ATC_ANG_RLL_P" in d["params"]
+    assert float(d["params"]["INS_GYRO_FILTER"]).is_integer()    # an INT16, as in ArduCopter
     cmp = d["compare"]["other"]
     assert cmp["params"] == {"ATC_RAT_RLL_P": 0.12, "ATC_ANG_RLL_P": 6.0}
     assert "att_rms_cmd_deg" in cmp["table1"]["S4"] and "att_p95_cmd_deg" in cmp["table1"]["S4"]

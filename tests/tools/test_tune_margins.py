@@ -84,3 +84,23 @@ def test_auto_search_space_holds_the_shaper_and_autotune_sized_angle_p():
     twins = tied_twins(sp)       # roll and pitch share one sampled value
     assert twins["ATC_ACCEL_R_MAX"] == "ATC_ACCEL_P_MAX" and twins["ATC_ANG_RLL_P"] == "ATC_ANG_PIT_P"
     assert set(twins.values()) == {n for n in sp if "_PIT_" in n or n == "ATC_ACCEL_P_MAX"}
+
+
+def test_auto_search_proposes_whole_values_for_integer_parameters():
+    """INS_GYRO_FILTER is an INT16 (as in ArduCopter): the FC refuses 34.7 Hz, so every
+    trial must propose a whole number, inside the space; floats stay floats."""
+    optuna = pytest.importorskip("optuna")
+    from silbridge.fc_sil import params as P
+    from silbridge.tools.tune.tune_auto import _suggest, search_space
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    sp = search_space(("roll",))
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=1))
+    for _ in range(30):
+        t = study.ask()
+        vals = {n: _suggest(t, n, *sp[n]) for n in ("INS_GYRO_FILTER", "ATC_RAT_RLL_P")}
+        lo, hi, _ = sp["INS_GYRO_FILTER"]
+        assert isinstance(vals["INS_GYRO_FILTER"], int) and lo <= vals["INS_GYRO_FILTER"] <= hi
+        P.BY_NAME["INS_GYRO_FILTER"].validate(vals["INS_GYRO_FILTER"])
+        study.tell(t, vals["ATC_RAT_RLL_P"])
+    assert len({round(t.params["ATC_RAT_RLL_P"], 6) for t in study.trials}) > 20

@@ -218,6 +218,15 @@ def objective(ev: dict) -> float:
     return v if math.isfinite(v) else 1e3
 
 
+def _suggest(trial, name: str, lo: float, hi: float, log: bool):
+    """The trial's value for name: whole numbers for an integer parameter (INS_GYRO_FILTER
+    is an INT16, as in ArduCopter; our FC refuses a fractional value, which ArduCopter
+    would truncate)."""
+    if P.BY_NAME[name].is_int:
+        return trial.suggest_int(name, math.ceil(lo), math.floor(hi), log=log)
+    return trial.suggest_float(name, lo, hi, log=log)
+
+
 def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> dict:
     """Run the optuna study; returns {"trials": [...], "baseline": ev, "ranked": [...]}."""
     import optuna
@@ -234,6 +243,8 @@ def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> di
     start = {n: float(base.get(n, defaults[n])) for n in space}
     for n, (lo, hi, _log) in space.items():
         start[n] = min(max(start[n], lo), hi)
+        if P.BY_NAME[n].is_int:
+            start[n] = int(round(start[n]))
     # Constraints: Trial.set_constraint from optuna 5, the sampler's constraints_func before.
     new_api = hasattr(optuna.trial.Trial, "set_constraint")
     extra = {} if new_api else {"constraints_func": lambda t: t.user_attrs["constraints"]}
@@ -251,7 +262,7 @@ def search(pool, cfg: AutoConfig, work: Path, *, progress=True, out=print) -> di
         while done < cfg.trials:
             n = 1 if done == 0 else min(cfg.batch, cfg.trials - done)
             trials = [study.ask() for _ in range(n)]
-            cands = [{k: t.suggest_float(k, lo, hi, log=log) for k, (lo, hi, log) in space.items()}
+            cands = [{k: _suggest(t, k, lo, hi, log) for k, (lo, hi, log) in space.items()}
                      for t in trials]
             for c in cands:
                 c.update({twin: c[n] for n, twin in twins.items()})
