@@ -105,9 +105,7 @@ class Px4HilServer:
         self.physics.step(frames, **kw)
         try:
             self.channel.send(frames)
-            frames = []
-            self.physics.sent(time.monotonic_ns(), frames)
-            self.channel.send(frames)
+            self.physics.sent(time.monotonic_ns())
         except HilPeerLost as e:
             raise PeerLost(f"PX4 went away: {e}") from None
 
