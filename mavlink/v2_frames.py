@@ -21,13 +21,19 @@ from __future__ import annotations
 
 import struct
 
-from fastcrc import crc16
+from pymavlink.dialects.v20 import ardupilotmega as mav
 
 MAGIC_V2 = 0xFD
 HEADER_V2 = 10
 _HEADER = struct.Struct("<BBBBBBBHB")   # magic, len, incompat, compat, seq, sys, comp, id
 _CRC = struct.Struct("<H")
-_mcrf4xx = crc16.mcrf4xx                # CRC-16/MCRF4XX (X.25 without the final xor)
+try:                                    # CRC-16/MCRF4XX (X.25 without the final xor)
+    from fastcrc.crc16 import mcrf4xx as _mcrf4xx
+except ImportError:
+    # `silbridge transport` hides fastcrc on purpose (its *-nofastcrc variants measure
+    # pymavlink's pure-Python CRC): then take pymavlink's own, as its encoder does.
+    def _mcrf4xx(data: bytes) -> int:
+        return mav.x25crc(data).crc
 
 
 class V2Frames:

@@ -157,3 +157,23 @@ def test_signing_is_refused_not_faked():
         V2Frames(codec, cls).pack(*([0] + [0.0] * 13 + [0, 0]))
     frame = V2Frames(mav.MAVLink(None), cls).pack(*([0] + [1.0] * 13 + [7, 0]))
     assert V2Frames(codec, cls).check(bytearray(frame)) is None    # the codec decides
+
+
+def test_without_fastcrc_the_crc_is_pymavlinks_pure_python_one(monkeypatch):
+    # `silbridge transport --transports udp-nofastcrc` hides fastcrc from its runner.
+    import importlib
+    import sys
+
+    from silbridge.mavlink import v2_frames
+    monkeypatch.setitem(sys.modules, "fastcrc", None)
+    monkeypatch.setitem(sys.modules, "fastcrc.crc16", None)
+    try:
+        slow = importlib.reload(v2_frames)
+        assert slow._mcrf4xx(b"123456789") == 0x6F91        # CRC-16/MCRF4XX check value
+        codec = mav.MAVLink(None, srcSystem=3, srcComponent=4)
+        wire = (123, 2) + tuple(float(i) for i in range(16)) + (128,)
+        cls = mav.MAVLink_hil_actuator_controls_message
+        assert slow.V2Frames(codec, cls).pack(*wire) == _message(cls, wire).pack(codec)
+    finally:
+        monkeypatch.undo()
+        importlib.reload(v2_frames)
