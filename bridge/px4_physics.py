@@ -21,7 +21,8 @@ step is the physics and one write. The truth frame (HIL_STATE_QUATERNION, when P
 interval is due) rides in that write after HIL_SENSOR, the order PX4 always got it in: a
 second write of its own woke PX4's link thread a second time per step, which cost more than
 packing it before the write (~3 us; `python -m silbridge.tools.autopilots.px4_speed`,
-2026-11-25: 15.1-16.4x with two writes, 15.2-16.9x with one).
+2026-11-25, five runs each on otherwise the same code: 15.1-16.4x, mean 15.8x, with two
+writes; 15.2-16.9x, mean 16.3x, with one).
 """
 
 from __future__ import annotations
