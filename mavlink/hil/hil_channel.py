@@ -29,8 +29,8 @@ DEFAULT_PORT = 4560
 _DGRAM_BYTES = 32 * 1024
 _SOCK_BUF_BYTES = 4 << 20
 # One TCP read. Not larger: CPython allocates the whole size for every recv() and shrinks it
-# to what came, and a 1 MiB buffer is an mmap/munmap pair per read (a 91-byte read: 17.6 us
-# against 2.4 us with 64 KiB on the 2-core VM), on the lockstep path PX4's reply takes.
+# to what came, and with 1 MiB that costs a 91-byte read 17.6 us against 2.4 us with 64 KiB
+# (2-core VM, socketpair), on the lockstep path PX4's reply takes.
 _RECV_BYTES = 1 << 16
 _TCP_TEXTS = WriteTexts(
     failed="TCP peer lost while sending ({why})",
