@@ -15,9 +15,14 @@ answer (a reply that never came within the stall limit; lockstep broken, reporte
 The sink (the run log, tools/autopilots/ardupilot_log.py's ArduPilotLogSink serves both foreign
 autopilots) gets step(records, pwm_record, sim) for every physics step and timing(...) once
 per PX4 step: PWM time [sim ns], reply arrival, physics done, frames sent [monotonic wall ns]
-and the wall interval since the previous reply. Both come after the step's HIL_SENSOR is
-sent (`sent`), with the truth frame: in lockstep PX4 computes its reply meanwhile, so the
-bridge's critical path per step is the physics and one HIL_SENSOR.
+and the wall interval since the previous reply. Both come after the step's frames are sent
+(`sent`): in lockstep PX4 computes its reply meanwhile, so the bridge's critical path per
+step is the physics and one write. The truth frame (HIL_STATE_QUATERNION, when PX4's
+interval is due) rides in that write after HIL_SENSOR, the order PX4 always got it in: a
+second write of its own woke PX4's link thread a second time per step, which cost more than
+packing it before the write (~3 us; `python -m silbridge.tools.autopilots.px4_speed`,
+2026-11-25, five runs each on otherwise the same code: 15.1-16.4x, mean 15.8x, with two
+writes; 15.2-16.9x, mean 16.3x, with one).
 """
 
 from __future__ import annotations
@@ -99,8 +104,9 @@ class Px4Physics:
         return False
 
     def step(self, out: list, *, answered: bool = True, freewheel: bool = False) -> None:
-        """One PX4 step under the current motors; the frames PX4 waits for (HIL_GPS when a fix
-        came, HIL_SENSOR) are appended to out. Send them, then call `sent`."""
+        """One PX4 step under the current motors; its frames (HIL_GPS when a fix came,
+        HIL_SENSOR, HIL_STATE_QUATERNION when due) are appended to out. Send them, then call
+        `sent`."""
         sim = self.sim
         acc = self.acc
         acc.reset()
@@ -120,14 +126,13 @@ class Px4Physics:
             self.unanswered += 1
         step_us = sim.sim_ns // 1000
         self.encoder.encode(acc, step_us, out)
+        self.encoder.encode_truth(acc, step_us, out)
         self.last_sent_us = step_us
         self._timing = (applied_ns, self._rx_ns, time.monotonic_ns())
 
-    def sent(self, tx_wall_ns: int, out: list) -> None:
-        """The step's sensor frames left at tx_wall_ns: what PX4 does not wait for happens
-        now, while PX4 computes its reply: the truth frame (HIL_STATE_QUATERNION, appended
-        to out: send it too), the run log's rows and the step's timing."""
-        self.encoder.encode_truth(self.acc, self.last_sent_us, out)
+    def sent(self, tx_wall_ns: int) -> None:
+        """The step's frames left at tx_wall_ns: what PX4 does not wait for happens now,
+        while PX4 computes its reply: the run log's rows and the step's timing."""
         sink = self.sink
         t = self._timing
         if sink is None or t is None:

@@ -29,7 +29,13 @@ from dataclasses import dataclass, field
 
 from silbridge.mavlink.hil.hil_channel import HilListener
 from silbridge.mavlink.hil.hil_errors import HilPeerLost
-from silbridge.mavlink.hil.px4_hil import CMD_SET_MESSAGE_INTERVAL
+from pymavlink.dialects.v20 import ardupilotmega as mav
+
+from silbridge.mavlink.hil.px4_hil import (
+    CMD_SET_MESSAGE_INTERVAL,
+    MSG_HIL_ACTUATOR_CONTROLS,
+    Px4Controls,
+)
 
 from .link_spin import spin_poll
 from .runner_errors import PeerLost, StartupCheckFailed
@@ -38,7 +44,6 @@ from .serve_loop import ServeResult, ended_by, stop_asked
 _NS = 1_000_000_000
 FREEWHEEL_WALL_S = 0.001
 STARTUP_CHECK_S = 2.0
-MSG_HIL_ACTUATOR_CONTROLS = 93
 MSG_COMMAND_LONG = 76
 
 
@@ -100,9 +105,7 @@ class Px4HilServer:
         self.physics.step(frames, **kw)
         try:
             self.channel.send(frames)
-            frames = []
-            self.physics.sent(time.monotonic_ns(), frames)
-            self.channel.send(frames)
+            self.physics.sent(time.monotonic_ns())
         except HilPeerLost as e:
             raise PeerLost(f"PX4 went away: {e}") from None
 
@@ -115,6 +118,8 @@ class Px4HilServer:
         spin_ns = int(spin_us * 1000)
         t0 = time.monotonic()
         self._accept(connect_timeout_s, stop)
+        if self.channel is not None:     # PX4's reply, once per step: no pymavlink object
+            self.channel.shortcut(mav.MAVLink_hil_actuator_controls_message, Px4Controls.of_wire)
         end_ns = int(round(duration_s * _NS))
         step_wall = 1.0 / phys.step_hz
         stopped_by = "duration"

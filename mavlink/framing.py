@@ -11,6 +11,11 @@ frames ourselves and let the codec only decode complete frames:
   magic byte, so a valid frame after garbage in the same packet is still accepted.
 
 Outcomes are counted per link (``RxCounters``) and a bad frame is never fatal.
+
+A link may name messages it wants without pymavlink's message objects (`shortcut`): their
+good frames are checked and unpacked by mavlink/v2_frames.py and built by the link's own
+function (PX4's HIL_ACTUATOR_CONTROLS, once per lockstep step); any frame that path does not
+vouch for goes through the codec as before, so it is counted the same way.
 """
 
 from __future__ import annotations
@@ -52,6 +57,11 @@ class FrameDecoder:
         self._codec = codec
         self._counters = counters
         self._buf = bytearray()
+        self._shortcuts: dict = {}
+
+    def shortcut(self, frames, build) -> None:
+        """Decode frames.msg_id (a v2_frames.V2Frames) as build(wire values) instead."""
+        self._shortcuts[frames.msg_id] = (frames, build)
 
     def feed(self, data: bytes, datagram: bool) -> list[mav.MAVLink_message]:
         """Decode all complete frames in data; return the good messages."""
@@ -105,6 +115,12 @@ class FrameDecoder:
                 c.rx_malformed += 1          # an incompatibility flag we cannot honour
                 return None
             msg_id = frame[7] | (frame[8] << 8) | (frame[9] << 16)
+            short = self._shortcuts.get(msg_id)
+            if short is not None:
+                values = short[0].check(frame)
+                if values is not None:
+                    c.rx_ok += 1
+                    return short[1](values)
         else:
             msg_id = frame[5]
         if msg_id not in mav.mavlink_map:

@@ -39,6 +39,7 @@ import math
 import struct
 
 import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.shm.records import (
     BARO_DTYPE,
@@ -54,6 +55,7 @@ from silbridge.shm.records import (
 )
 
 from silbridge.mavlink.hil.hil_errors import HilInputError
+from silbridge.mavlink.v2_frames import V2Frames
 
 _G0 = 9.80665
 _NS = 1_000_000_000
@@ -130,6 +132,10 @@ class SensorEncoder:
         self.codec = codec
         self.origin = origin          # (lat_e7, lon_e7, alt_mm) of NED zero
         self.messages = 0
+        # The frames of the hot path, packed as msg.pack(codec) would (mavlink/v2_frames.py).
+        self.sensor_frames = V2Frames(codec, mav.MAVLink_hil_sensor_message)
+        self._gps = V2Frames(codec, mav.MAVLink_hil_gps_message)
+        self._state = V2Frames(codec, mav.MAVLink_hil_state_quaternion_message)
 
     def encode(self, recs: np.ndarray, wall_ns: int, out: list) -> None:
         """Append the frames of `recs` (whole steps, any number) to the list out."""
@@ -143,7 +149,6 @@ class SensorEncoder:
             self._step(recs[start:], kinds[start:], wall_ns, out)
 
     def _step(self, recs, kinds, wall_ns: int, out: list) -> None:
-        c = self.codec
         lo, hi = wall_fields(wall_ns)
         imu_idx = np.flatnonzero(kinds == _IMU)
         baro = mag = gnss = sp = att = nav = None
@@ -176,11 +181,11 @@ class SensorEncoder:
             gyr = imu["gyro_frd_rad_s"].tolist()
             temp = imu["temperature_c"].tolist()
             last = len(t_us) - 1
-            enc = c.hil_sensor_encode
+            pack = self.sensor_frames.pack
             for j in range(last):
                 a, g = acc[j], gyr[j]
-                out.append(enc(t_us[j], a[0], a[1], a[2], g[0], g[1], g[2], 0.0, 0.0, 0.0, 0.0,
-                           lo, hi, temp[j], UPD_IMU, 0).pack(c))
+                out.append(pack(t_us[j], a[0], a[1], a[2], g[0], g[1], g[2], 0.0, 0.0, 0.0, 0.0,
+                                lo, hi, temp[j], UPD_IMU, 0))
             a, g = acc[last], gyr[last]
             out.append(self._sensor_frame(t_us[last], a, g, temp[last], UPD_IMU, baro, mag, lo,
                                           hi))
@@ -204,19 +209,22 @@ class SensorEncoder:
             pressure_hpa = float(baro["pressure_pa"]) / 100.0
             temp_c = float(baro["temperature_c"])
             bits |= UPD_ABS_PRESSURE | UPD_TEMPERATURE
-        return self.codec.hil_sensor_encode(t_us, a[0], a[1], a[2], g[0], g[1], g[2], m[0], m[1],
-                                            m[2], pressure_hpa, lo, hi, temp_c, bits,
-                                            0).pack(self.codec)
+        return self.sensor_frames.pack(t_us, a[0], a[1], a[2], g[0], g[1], g[2], m[0], m[1], m[2],
+                                       pressure_hpa, lo, hi, temp_c, bits, 0)
 
     def _gps_frame(self, g, t_us) -> bytes:
-        vn, ve, vd = g["vel_ned_m_s"].tolist()
+        return self.gps_frame(t_us, int(g["lat_e7"]), int(g["lon_e7"]), int(g["alt_mm"]),
+                              *g["vel_ned_m_s"].tolist(), int(g["eph_cm"]), int(g["epv_cm"]),
+                              int(g["fix_type"]), int(g["satellites"]))
+
+    def gps_frame(self, t_us, lat_e7, lon_e7, alt_mm, vn, ve, vd, eph_cm, epv_cm, fix_type,
+                  satellites) -> bytes:
+        """HIL_GPS of a GNSS record's fields (in the record's order)."""
         cm = [max(-32767, min(32767, round(v * 100.0))) for v in (vn, ve, vd)]
         speed_cm = min(65534, round(math.hypot(cm[0], cm[1])))
         cog = round(math.degrees(math.atan2(cm[1], cm[0])) * 100.0) % 36000
-        return self.codec.hil_gps_encode(
-            t_us, int(g["fix_type"]), int(g["lat_e7"]), int(g["lon_e7"]), int(g["alt_mm"]),
-            int(g["eph_cm"]), int(g["epv_cm"]), speed_cm, cm[0], cm[1], cm[2], cog,
-            int(g["satellites"]), 0, 0).pack(self.codec)
+        return self._gps.pack(t_us, lat_e7, lon_e7, alt_mm, eph_cm, epv_cm, speed_cm, cm[0],
+                              cm[1], cm[2], cog, fix_type, satellites, 0, 0)
 
     def _state_frame(self, att, nav, t_us) -> bytes:
         q, rates, sf = (1.0, 0.0, 0.0, 0.0), (0.0,) * 3, (0.0, 0.0, -_G0)
@@ -224,11 +232,16 @@ class SensorEncoder:
             q = att["q_wxyz"].tolist()
             rates = att["rates_frd_rad_s"].tolist()
             sf = att["specific_force_frd_m_s2"].tolist()
-        lat0, lon0, alt0 = self.origin
         pos, vel = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
         if nav is not None:
             pos = nav["pos_ned_m"].tolist()
             vel = nav["vel_ned_m_s"].tolist()
+        return self.state_frame(t_us, q, rates, sf, pos, vel)
+
+    def state_frame(self, t_us, q, rates, sf, pos, vel) -> bytes:
+        """HIL_STATE_QUATERNION of GT_ATT's q, rates, specific force and GT_NAV's position
+        and velocity (sequences in the records' units)."""
+        lat0, lon0, alt0 = self.origin
         lat = lat0 + round(pos[0] / _M_PER_DEG * 1e7)
         coslat = max(1e-6, math.cos(math.radians(lat0 * 1e-7)))
         lon = lon0 + round(pos[1] / (_M_PER_DEG * coslat) * 1e7)
@@ -236,9 +249,9 @@ class SensorEncoder:
         v_cm = [max(-32767, min(32767, round(v * 100.0))) for v in vel]
         acc_mg = [max(-32767, min(32767, round(a / _G0 * 1000.0))) for a in sf]
         speed_cm = min(65535, round(math.sqrt(sum(v * v for v in v_cm))))
-        return self.codec.hil_state_quaternion_encode(
-            t_us, q, rates[0], rates[1], rates[2], lat, lon, alt, v_cm[0], v_cm[1], v_cm[2],
-            speed_cm, speed_cm, acc_mg[0], acc_mg[1], acc_mg[2]).pack(self.codec)
+        return self._state.pack(t_us, q[0], q[1], q[2], q[3], rates[0], rates[1], rates[2], lat,
+                                lon, alt, v_cm[0], v_cm[1], v_cm[2], speed_cm, speed_cm,
+                                acc_mg[0], acc_mg[1], acc_mg[2])
 
     def _setpoint_frames(self, sp, t_us) -> bytes:
         c = self.codec

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 from silbridge.mavlink.framing import FrameDecoder, RxCounters
 from silbridge.mavlink.hil.hil_errors import HilPeerLost
+from silbridge.mavlink.v2_frames import V2Frames
 
 _WAIT_S = 0.01    # one select() wait: short, so the deadline is checked often
 
@@ -72,6 +73,11 @@ class HilLink:
         self.tx_frames = 0
         self.tx_bytes = 0
         self.tx_dropped = 0
+
+    def shortcut(self, msg_class, build) -> None:
+        """Receive msg_class (a pymavlink dialect class) as build(wire values), without
+        pymavlink's message objects (mavlink/framing.py: bad frames still go to the codec)."""
+        self._decoder.shortcut(V2Frames(self.codec, msg_class), build)
 
     def _lost(self, why: str) -> None:
         self.eof = True

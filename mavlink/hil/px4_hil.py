@@ -32,18 +32,11 @@ from __future__ import annotations
 
 import math
 import struct
+from typing import NamedTuple
 
 import numpy as np
 
-from silbridge.shm.records import (
-    BARO_DTYPE,
-    GNSS_DTYPE,
-    GT_ATT_DTYPE,
-    GT_NAV_DTYPE,
-    MAG_DTYPE,
-    RECORD_SIZE,
-    Kind,
-)
+from silbridge.shm.records import RECORD_SIZE, Kind
 
 from silbridge.mavlink.hil.hil_codec import SensorEncoder
 
@@ -58,15 +51,22 @@ MOTORS = 4
 MODE_ARMED = 128
 FLAG_LOCKSTEP = 1
 MSG_HIL_STATE_QUATERNION = 115
+MSG_HIL_ACTUATOR_CONTROLS = 93
 CMD_SET_MESSAGE_INTERVAL = 511
 PX4_AUTOPILOT = 12
 
-_KIND = struct.Struct("<H")
+# The fields PX4 reads, straight from a record's bytes (shm/records.py: a 24-byte header,
+# then the kind's payload; tests/mavlink/test_px4_frames.py checks these against the dtypes).
 _IMU = struct.Struct("<24x6f")          # accel_frd_m_s2[3], gyro_frd_rad_s[3]
+_BARO = struct.Struct("<24x2f")         # pressure_pa, temperature_c
+_MAG = struct.Struct("<24x3f")          # field_frd_gauss[3]
+_GNSS = struct.Struct("<24x3i3f2H2B")   # lat_e7, lon_e7, alt_mm, vel_ned_m_s[3], eph_cm,
+                                        # epv_cm, fix_type, satellites
+_GT_ATT = struct.Struct("<24x10f")      # q_wxyz[4], rates_frd_rad_s[3], specific_force[3]
+_GT_NAV = struct.Struct("<24x3d3f")     # pos_ned_m[3], vel_ned_m_s[3]
 _IMU_K, _BARO_K, _MAG_K, _GNSS_K = int(Kind.IMU), int(Kind.BARO), int(Kind.MAG), int(Kind.GNSS)
 _GT_ATT_K, _GT_NAV_K = int(Kind.GT_ATT), int(Kind.GT_NAV)
-_DTYPES = {_BARO_K: BARO_DTYPE, _MAG_K: MAG_DTYPE, _GNSS_K: GNSS_DTYPE, _GT_ATT_K: GT_ATT_DTYPE,
-           _GT_NAV_K: GT_NAV_DTYPE}
+_KEPT = frozenset((_BARO_K, _MAG_K, _GNSS_K, _GT_ATT_K, _GT_NAV_K))
 
 
 def pressure_altitude_m(pa: float) -> float:
@@ -84,35 +84,70 @@ def controls_to_pwm_us(controls) -> list[int]:
     return out
 
 
+class Px4Controls(NamedTuple):
+    """HIL_ACTUATOR_CONTROLS as the lockstep loop reads it, built from the frame's wire values
+    (mavlink/v2_frames.py) instead of a pymavlink message object, once per PX4 step."""
+    time_usec: int
+    flags: int
+    controls: tuple
+    mode: int
+
+    @classmethod
+    def of_wire(cls, v: tuple) -> "Px4Controls":
+        return cls(v[0], v[1], v[2:18], v[18])    # wire order: time_usec, flags, controls, mode
+
+    def get_msgId(self) -> int:                   # noqa: N802 - pymavlink's name
+        return MSG_HIL_ACTUATOR_CONTROLS
+
+    def get_type(self) -> str:
+        return "HIL_ACTUATOR_CONTROLS"
+
+
 class StepAccumulator:
     """The records of the physics steps that make one PX4 step, reduced to what PX4 reads.
 
     IMU: the mean of the samples (a boxcar, as an IMU FIFO read averages); baro, mag, GNSS:
-    the newest sample if one came; truth: the newest GT_ATT and GT_NAV."""
+    the newest sample if one came; truth: the newest GT_ATT and GT_NAV. A kept record is its
+    step's bytes and its offset there (no copy: the bytes are this step's own)."""
 
     def __init__(self):
         self.reset()
 
     def reset(self) -> None:
-        self.sums = [0.0] * 6
-        self.n_imu = 0
-        self.latest: dict[int, bytes] = {}
+        self.imu: list[tuple] = []                # (ax, ay, az, gx, gy, gz) per sample
+        self.latest: dict[int, tuple] = {}        # kind -> (bytes, offset)
+
+    @property
+    def n_imu(self) -> int:
+        return len(self.imu)
 
     def add(self, recs: np.ndarray) -> None:
         raw = recs.tobytes()
-        sums = self.sums
         for off in range(0, len(raw), RECORD_SIZE):
-            k = _KIND.unpack_from(raw, off)[0]
+            k = raw[off] | (raw[off + 1] << 8)    # the uint16 kind
             if k == _IMU_K:
-                for j, v in enumerate(_IMU.unpack_from(raw, off)):
-                    sums[j] += v
-                self.n_imu += 1
-            elif k in _DTYPES:
-                self.latest[k] = raw[off:off + RECORD_SIZE]
+                self.imu.append(_IMU.unpack_from(raw, off))
+            elif k in _KEPT:
+                self.latest[k] = (raw, off)
 
-    def record(self, kind: int):
-        raw = self.latest.get(kind)
-        return None if raw is None else np.frombuffer(raw, dtype=_DTYPES[kind])[0]
+    def imu_mean(self) -> tuple:
+        """(ax, ay, az, gx, gy, gz), summed in sample order (the sum's rounding is part of
+        what PX4 receives, so no reordering or compensated sum)."""
+        s0 = s1 = s2 = s3 = s4 = s5 = 0.0
+        for v in self.imu:
+            s0 += v[0]
+            s1 += v[1]
+            s2 += v[2]
+            s3 += v[3]
+            s4 += v[4]
+            s5 += v[5]
+        n = len(self.imu)
+        return s0 / n, s1 / n, s2 / n, s3 / n, s4 / n, s5 / n
+
+    def fields(self, kind: int, layout: struct.Struct):
+        """The newest record of kind unpacked with layout, or None if none came."""
+        got = self.latest.get(kind)
+        return None if got is None else layout.unpack_from(got[0], got[1])
 
 
 class Px4SensorEncoder:
@@ -122,6 +157,7 @@ class Px4SensorEncoder:
     def __init__(self, codec, origin=(0, 0, 0)):
         self.codec = codec
         self._truth = SensorEncoder(codec, origin)    # HIL_GPS / HIL_STATE_QUATERNION layout
+        self._sensor = self._truth.sensor_frames
         self.state_interval_us = STATE_INTERVAL_US
         self._next_state_us = 0
         self.temperature_c = 20.0
@@ -139,42 +175,38 @@ class Px4SensorEncoder:
         return True
 
     def encode(self, acc: StepAccumulator, step_us: int, out: list) -> None:
-        c = self.codec
-        if acc.n_imu:
-            n = acc.n_imu
-            a = tuple(s / n for s in acc.sums[0:3])
-            g = tuple(s / n for s in acc.sums[3:6])
-            self._last_acc, self._last_gyro = a, g
+        if acc.imu:
+            a0, a1, a2, g0, g1, g2 = acc.imu_mean()
+            self._last_acc, self._last_gyro = (a0, a1, a2), (g0, g1, g2)
         else:   # no sample this step (IMU slower than PX4's step): hold the last one
-            a, g = self._last_acc, self._last_gyro
+            (a0, a1, a2), (g0, g1, g2) = self._last_acc, self._last_gyro
         bits = FIELDS_ACCEL | FIELDS_GYRO
-        mag = acc.record(_MAG_K)
-        m = (0.0, 0.0, 0.0)
-        if mag is not None:
-            m = mag["field_frd_gauss"].tolist()
+        m = acc.fields(_MAG_K, _MAG)
+        if m is not None:
             bits |= FIELDS_MAG
-        baro = acc.record(_BARO_K)
+        else:
+            m = (0.0, 0.0, 0.0)
+        baro = acc.fields(_BARO_K, _BARO)
         hpa = alt = 0.0
         if baro is not None:
-            pa = float(baro["pressure_pa"])
+            pa, self.temperature_c = baro
             hpa, alt = pa / 100.0, pressure_altitude_m(pa)
-            self.temperature_c = float(baro["temperature_c"])
             bits |= FIELDS_BARO
-        gnss = acc.record(_GNSS_K)
+        gnss = acc.fields(_GNSS_K, _GNSS)
         if gnss is not None:
-            out.append(self._truth._gps_frame(gnss, step_us))
+            out.append(self._truth.gps_frame(step_us, *gnss))
             self.sent["HIL_GPS"] += 1
-        out.append(c.hil_sensor_encode(step_us, a[0], a[1], a[2], g[0], g[1], g[2], m[0], m[1],
-                                       m[2], hpa, 0.0, alt, self.temperature_c, bits,
-                                       0).pack(c))
+        out.append(self._sensor.pack(step_us, a0, a1, a2, g0, g1, g2, m[0], m[1], m[2], hpa, 0.0,
+                                     alt, self.temperature_c, bits, 0))
         self.sent["HIL_SENSOR"] += 1
 
     def encode_truth(self, acc: StepAccumulator, step_us: int, out: list) -> None:
         """HIL_STATE_QUATERNION of the step, when PX4's requested interval has passed."""
         iv = self.state_interval_us
         if iv >= 0 and step_us >= self._next_state_us:
-            att, nav = acc.record(_GT_ATT_K), acc.record(_GT_NAV_K)
+            att, nav = acc.fields(_GT_ATT_K, _GT_ATT), acc.fields(_GT_NAV_K, _GT_NAV)
             if att is not None and nav is not None:
-                out.append(self._truth._state_frame(att, nav, step_us))
+                out.append(self._truth.state_frame(step_us, att[0:4], att[4:7], att[7:10],
+                                                   nav[0:3], nav[3:6]))
                 self.sent["HIL_STATE_QUATERNION"] += 1
                 self._next_state_us = step_us + iv
