@@ -40,18 +40,16 @@ import time
 
 import numpy as np
 
+from silbridge.shm.record_structs import GT_ATT as _GT_ATT
+from silbridge.shm.record_structs import GT_NAV as _GT_NAV
+from silbridge.shm.record_structs import IMU as _IMU
+from silbridge.shm.record_structs import KIND as _KIND
 from silbridge.shm.records import PWM_DTYPE, RECORD_SIZE, Kind
 
 from . import ardupilot_json as apj
 from ._step import json_reply as _json_reply
 
 _NS = 1_000_000_000
-# Payload readers (shm/include/sb_records.h; payload after the 24-byte header). struct on
-# the step's bytes costs a few us where numpy masks and views cost some 60 us per step.
-_KIND = struct.Struct("<H")
-_IMU = struct.Struct("<24x6f")          # accel_frd_m_s2[3], gyro_frd_rad_s[3]
-_GT_ATT = struct.Struct("<24x10f")      # q_wxyz[4], rates_frd_rad_s[3], specific_force[3]
-_GT_NAV = struct.Struct("<24x3d3f")     # pos_ned_m[3], vel_ned_m_s[3]
 _IMU_KIND, _GT_ATT_KIND, _GT_NAV_KIND = int(Kind.IMU), int(Kind.GT_ATT), int(Kind.GT_NAV)
 # PWM_DTYPE: header (kind, flags, seq, sim_ns, wall_ns), pwm_us[8], channel_count, armed,
 # reserved0, fc_step_seq, imu_sim_ns, 8 bytes of padding.

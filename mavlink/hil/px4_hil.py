@@ -36,6 +36,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from silbridge.shm.record_structs import BARO as _BARO
+from silbridge.shm.record_structs import GNSS as _GNSS
+from silbridge.shm.record_structs import GT_ATT as _GT_ATT
+from silbridge.shm.record_structs import GT_NAV as _GT_NAV
+from silbridge.shm.record_structs import IMU as _IMU
+from silbridge.shm.record_structs import MAG as _MAG
 from silbridge.shm.records import RECORD_SIZE, Kind
 
 from silbridge.mavlink.hil.hil_codec import SensorEncoder
@@ -55,15 +61,6 @@ MSG_HIL_ACTUATOR_CONTROLS = 93
 CMD_SET_MESSAGE_INTERVAL = 511
 PX4_AUTOPILOT = 12
 
-# The fields PX4 reads, straight from a record's bytes (shm/records.py: a 24-byte header,
-# then the kind's payload; tests/mavlink/test_px4_frames.py checks these against the dtypes).
-_IMU = struct.Struct("<24x6f")          # accel_frd_m_s2[3], gyro_frd_rad_s[3]
-_BARO = struct.Struct("<24x2f")         # pressure_pa, temperature_c
-_MAG = struct.Struct("<24x3f")          # field_frd_gauss[3]
-_GNSS = struct.Struct("<24x3i3f2H2B")   # lat_e7, lon_e7, alt_mm, vel_ned_m_s[3], eph_cm,
-                                        # epv_cm, fix_type, satellites
-_GT_ATT = struct.Struct("<24x10f")      # q_wxyz[4], rates_frd_rad_s[3], specific_force[3]
-_GT_NAV = struct.Struct("<24x3d3f")     # pos_ned_m[3], vel_ned_m_s[3]
 _IMU_K, _BARO_K, _MAG_K, _GNSS_K = int(Kind.IMU), int(Kind.BARO), int(Kind.MAG), int(Kind.GNSS)
 _GT_ATT_K, _GT_NAV_K = int(Kind.GT_ATT), int(Kind.GT_NAV)
 _KEPT = frozenset((_BARO_K, _MAG_K, _GNSS_K, _GT_ATT_K, _GT_NAV_K))

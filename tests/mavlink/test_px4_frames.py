@@ -14,6 +14,7 @@ from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 from silbridge.mavlink.hil import px4_hil
 from silbridge.mavlink.hil.hil_channel import make_codec
+from silbridge.shm import record_structs
 from silbridge.shm.records import DTYPES, RECORD_SIZE, Kind
 
 _G0 = 9.80665
@@ -21,13 +22,14 @@ _M_PER_DEG = 6378137.0 * math.pi / 180.0
 
 
 @pytest.mark.parametrize("kind, layout, fields", [
-    (Kind.IMU, px4_hil._IMU, ["accel_frd_m_s2", "gyro_frd_rad_s"]),
-    (Kind.BARO, px4_hil._BARO, ["pressure_pa", "temperature_c"]),
-    (Kind.MAG, px4_hil._MAG, ["field_frd_gauss"]),
-    (Kind.GNSS, px4_hil._GNSS, ["lat_e7", "lon_e7", "alt_mm", "vel_ned_m_s", "eph_cm", "epv_cm",
-                                "fix_type", "satellites"]),
-    (Kind.GT_ATT, px4_hil._GT_ATT, ["q_wxyz", "rates_frd_rad_s", "specific_force_frd_m_s2"]),
-    (Kind.GT_NAV, px4_hil._GT_NAV, ["pos_ned_m", "vel_ned_m_s"]),
+    (Kind.IMU, record_structs.IMU, ["accel_frd_m_s2", "gyro_frd_rad_s"]),
+    (Kind.BARO, record_structs.BARO, ["pressure_pa", "temperature_c"]),
+    (Kind.MAG, record_structs.MAG, ["field_frd_gauss"]),
+    (Kind.GNSS, record_structs.GNSS, ["lat_e7", "lon_e7", "alt_mm", "vel_ned_m_s", "eph_cm",
+                                      "epv_cm", "fix_type", "satellites"]),
+    (Kind.GT_ATT, record_structs.GT_ATT,
+     ["q_wxyz", "rates_frd_rad_s", "specific_force_frd_m_s2"]),
+    (Kind.GT_NAV, record_structs.GT_NAV, ["pos_ned_m", "vel_ned_m_s"]),
 ])
 def test_record_layouts_match_the_dtypes(kind, layout, fields):
     dt = DTYPES[kind]
