@@ -45,7 +45,7 @@ def parse_address(text: str | None, default_port: int) -> tuple[str, int]:
     try:
         return host or "127.0.0.1", int(port)
     except ValueError:
-        raise ArduPilotProtocolError(f"--sitl-address wants HOST:PORT, got {text!r}") from None
+        raise ArduPilotProtocolError(f"--link-addr wants HOST:PORT, got {text!r}") from None
 
 
 class JsonPhysicsServer:
@@ -58,7 +58,7 @@ class JsonPhysicsServer:
             self.sock.close()
             raise BridgeError(f"cannot listen for ArduPilot SITL on {address[0]}:{address[1]} "
                               f"({e.strerror}): another bridge or physics program uses it; "
-                              "stop it or pick another --sitl-address / SITL --instance") from None
+                              "stop it or pick another --link-addr / SITL --instance") from None
         self.address = self.sock.getsockname()
 
     def close(self) -> None:

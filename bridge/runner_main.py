@@ -13,6 +13,8 @@ the run with the reason.
 
 from __future__ import annotations
 
+import itertools
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -180,7 +182,9 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
         out(checks[-1].line())
     watch = PeerWatch(seg, extra_check=peer_check) if fc_poll is None else None
 
-    n_steps = int(round(cfg.duration_s * _NS / sim.dt_ns))
+    # duration inf: real time until stopped (Ctrl-C / SIGTERM / a crash).
+    steps = range(1, int(round(cfg.duration_s * _NS / sim.dt_ns)) + 1) \
+        if math.isfinite(cfg.duration_s) else itertools.count(1)
     # The rate checks need a window long on the wall clock too: at --speed 8 one sim
     # second is 125 ms of wall time, where a single scheduler hiccup moves a rate by 5 %.
     window_s = cfg.check_window_s if cfg.lockstep else cfg.check_window_s * max(1.0, cfg.speed)
@@ -196,7 +200,7 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
     in_process_lockstep = fc_poll is not None and cfg.lockstep
     interrupted = None
     try:
-        for k in range(1, n_steps + 1):
+        for k in steps:
             if stop.requested:
                 interrupted = stop.name
                 out(f"{interrupted or 'stop'}: run stopped at t={sim.sim_ns / _NS:.3f} s")

@@ -1,17 +1,23 @@
 """Build a MAVLink-served Vehicle: parameter store, .parm file, mission file, GcsServer.
 
-``start_mavlink_vehicle(core, MavlinkOptions(...))`` is what `silbridge fc` and `silbridge
-fly --realtime` call: parameters come from the declaration defaults, then the `--params`
-file (if it exists; it is created by the first save), then `--param NAME=VALUE` overrides;
-the server opens every endpoint at once (a busy port fails here, with a clear message) and
-serves on its own thread; the vehicle is returned ready to be the FcLoop's supervisor.
-Call ``vehicle_close(vehicle)`` at the end (writes pending parameter changes, closes sockets).
+``start_mavlink_vehicle(core, MavlinkOptions(...))`` is what `silbridge fc`, `fly --realtime`
+and `sitl` call: parameters come from ``load_start_params`` (the declaration defaults, then
+the `--params` file, then `--param NAME=VALUE` overrides; the scripted, non-MAVLink FC loads
+them the same way); the server opens every endpoint at once (a busy port fails here, with a
+clear message) and serves on its own thread; the vehicle is returned ready to be the FcLoop's
+supervisor. Call ``vehicle_close(vehicle)`` at the end (writes pending parameter changes,
+closes sockets).
+
+The `--params` file is read-only: PARAM_SET changes are written back to it only with
+``save_params`` (`--save-params`), which also creates a missing file at start. A mistyped
+path must never turn into a new file, nor a tuned file into the GCS's scratch pad.
 """
 
 from __future__ import annotations
 
 import logging
 import os
+import sys
 from dataclasses import dataclass, field
 
 from .errors import ParamError
@@ -28,27 +34,33 @@ class VehicleSetupError(Exception):
 @dataclass
 class MavlinkOptions:
     endpoints: list = field(default_factory=list)   # mavlink.endpoints.Endpoint or URL strings
-    param_file: str | None = None                   # --params FILE (.parm, saved atomically)
+    param_file: str | None = None                   # --params FILE (.parm, read at start)
+    save_params: bool = False                       # --save-params: PARAM_SETs saved to it
     mission_file: str | None = None                 # --mission FILE (QGC WPL 110; fence and
                                                     # rally in FILE.fence / FILE.rally)
     serve: bool = True                              # False: the vehicle without a server
     tlog: str | None = None                         # --tlog FILE: the GCS traffic (mavlink/gcs/tlog.py)
 
 
-def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None = None,
-                          sink=None, out=None) -> Vehicle:
-    from silbridge.mavlink.errors import MissionFileError, ParamFileError
-    from silbridge.mavlink.gcs.mission_store import MissionStore, home_item
-    from silbridge.mavlink.gcs.params_file import load_into_store
-    from silbridge.mavlink.gcs.server import GcsServer
-    from silbridge.mavlink.gcs.geo_store import GeoStore
-    from silbridge.mavlink.gcs.wpl import geo_file, load_wpl
+def load_start_params(core, param_file: str | None, overrides: dict | None = None, *,
+                      create: bool = False) -> tuple[CoreParamStore, list[str]]:
+    """Apply the --params file, then the --param overrides, to core; return the store and
+    one message per file entry it refused. A missing file is an error unless create is set
+    (--save-params): then the full parameter set is written there now, and said on stderr."""
+    from silbridge.mavlink.errors import ParamFileError
+    from silbridge.mavlink.gcs.params_file import apply_parm, load_parm, save_store
 
     store = CoreParamStore(core)
     problems: list[str] = []
-    if opts.param_file:
+    created = False
+    if param_file and not os.path.exists(param_file):
+        if not create:
+            raise VehicleSetupError(f"--params {param_file}: no such file; check the path "
+                                    f"(with --save-params a missing file is created)")
+        created = True
+    elif param_file:
         try:
-            problems += load_into_store(opts.param_file, store)
+            problems += apply_parm(store, load_parm(param_file))
         except ParamFileError as exc:
             raise VehicleSetupError(str(exc)) from None
     for name, value in (overrides or {}).items():
@@ -56,6 +68,26 @@ def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None 
         if err:
             raise ParamError(f"--param {name}={value:g}: {err}")
     store.apply()
+    if created:
+        try:
+            save_store(param_file, store)
+        except ParamFileError as exc:
+            raise VehicleSetupError(str(exc)) from None
+        print(f"silbridge: created {param_file} with the full parameter set "
+              f"(--save-params writes PARAM_SET changes there)", file=sys.stderr)
+    return store, problems
+
+
+def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None = None,
+                          sink=None, out=None) -> Vehicle:
+    from silbridge.mavlink.errors import MissionFileError
+    from silbridge.mavlink.gcs.mission_store import MissionStore, home_item
+    from silbridge.mavlink.gcs.server import GcsServer
+    from silbridge.mavlink.gcs.geo_store import GeoStore
+    from silbridge.mavlink.gcs.wpl import geo_file, load_wpl
+
+    store, problems = load_start_params(core, opts.param_file, overrides,
+                                        create=opts.save_params)
     missions = MissionStore()
     if opts.mission_file and os.path.exists(opts.mission_file):
         try:
@@ -96,8 +128,8 @@ def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None 
             tlog = TlogWriter(opts.tlog)
         try:
             server = GcsServer(vehicle, store, opts.endpoints or None, sysid=sysid, compid=1,
-                               param_file=opts.param_file, missions=missions, fence=geo[1],
-                               rally=geo[2])
+                               param_file=opts.param_file, save_params=opts.save_params,
+                               missions=missions, fence=geo[1], rally=geo[2])
         except Exception:
             if tlog is not None:
                 tlog.close()

@@ -34,7 +34,7 @@ def render() -> str:
         "Generated from `fc_sil/core/fc_params.def` by `tools/gen_param_doc.py`; do not edit "
         "by hand (`python -m silbridge.tools.gen_param_doc` rewrites it).",
         "",
-        "ArduCopter 4.5 names and defaults where ArduCopter has the parameter; `SB_` names for "
+        "ArduCopter 4.6 names and defaults where ArduCopter has the parameter; `SB_` names for "
         "the paper's own features. The index is the permanent slot (never renumbered). "
         "*Where*: `core` parameters live in the C core's struct (validated and effective at "
         "once, filters recomputed); `host` parameters are kept by the Python runtime. "
@@ -65,7 +65,8 @@ def render() -> str:
         "`FlightCore.set_feature(name, on)` sets the enable parameter; the paper's ablation "
         "(`silbridge ablate`) flies the paper's controller with every marked feature on "
         "(`full`, whatever the default), then each marked one off alone, then all off, and "
-        "the defaults. The ablation also decided the defaults (README, \"Ablation\"): off "
+        "the defaults. The ablation also decided the defaults (CHANGELOG.md, \"The flight "
+        "controller\"): off "
         "are the features whose removal lost nothing measurable in S1..S4 and A1..A4, and "
         "the PT2x2 D filter, whose removal buys 5.2 us of S4 PWM p-p for 0.006 deg of S4 "
         "tracking (N = 20).",

@@ -70,8 +70,11 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
     EndpointError at once); ``start()`` serves on a thread, ``serve_until()`` on the caller's.
 
     vehicle: VehicleCommands, called only from ``service()`` on the vehicle thread.
-    params: ParamStore; ``param_file``: .parm written atomically after PARAM_SETs (and by
-    MAV_CMD_PREFLIGHT_STORAGE); load it at start with params_file.load_into_store().
+    params: ParamStore; ``param_file``: the vehicle's .parm; MAV_CMD_PREFLIGHT_STORAGE reads it
+    back, and with ``save_params`` it is written atomically after PARAM_SETs (and by
+    PREFLIGHT_STORAGE's write). Without ``save_params`` the file is never written (`silbridge
+    --params FILE` is read-only unless --save-params). Load it at start with
+    params_file.load_into_store().
     missions: the MissionStore to serve (a fresh one by default); fence and rally: the
     GeoStores of the plan's other two lists (fresh ones by default).
     """
@@ -79,12 +82,14 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
     def __init__(self, vehicle: VehicleCommands, params: ParamStore,
                  endpoints: Sequence[str | Endpoint] | None = None, sysid: int = 1,
                  compid: int = 1, *, param_file: str | os.PathLike | None = None,
+                 save_params: bool = True,
                  missions: MissionStore | None = None, timing: ServerTiming | None = None,
                  fence: GeoStore | None = None, rally: GeoStore | None = None):
         self.vehicle = vehicle
         self.params = params
         self.sysid, self.compid = sysid, compid
         self.param_file = os.fspath(param_file) if param_file is not None else None
+        self.save_params = save_params and self.param_file is not None
         self.timing = timing or ServerTiming()
         self.missions = missions or MissionStore()
         self.fence = fence or GeoStore(mav.MAV_MISSION_TYPE_FENCE)

@@ -4,8 +4,8 @@ protocols.
 A mixin of GcsServer (mavlink/gcs/server.py). commands.CommandPlanner asks the server for
 the answers that need its state (REQUEST_MESSAGE, message intervals, the mission count,
 PREFLIGHT_STORAGE); MissionProtocol reports uploads and MISSION_SET_CURRENT; ParamProtocol
-reports changed parameters, which are written to the .parm file after a short delay so a
-burst of PARAM_SETs costs one file write.
+reports changed parameters, which (when the server may save: ``save_params``) are written to
+the .parm file after a short delay so a burst of PARAM_SETs costs one file write.
 """
 
 from __future__ import annotations
@@ -82,6 +82,9 @@ class ServerHooks:
         if self.param_file is None:
             return cmds.Immediate(mav.MAV_RESULT_DENIED,
                                   "No parameter file: start with --params FILE")
+        if action == 1 and not self.save_params:
+            return cmds.Immediate(mav.MAV_RESULT_DENIED,
+                                  "Parameter file is read-only: start with --save-params")
         try:
             if action == 1:
                 self._param_dirty_s = None
@@ -140,11 +143,11 @@ class ServerHooks:
 
     # -- parameters -------------------------------------------------------------------------------
     def _param_changed(self, name: str) -> None:
-        if self.param_file is not None and self._param_dirty_s is None:
+        if self.save_params and self._param_dirty_s is None:
             self._param_dirty_s = time.monotonic()
 
     def _save_params_now(self) -> None:
-        if self._param_dirty_s is None or self.param_file is None:
+        if self._param_dirty_s is None or not self.save_params:
             return
         self._param_dirty_s = None
         try:

@@ -49,9 +49,9 @@ def parse_addr(text: str | None, default_host: str = "127.0.0.1") -> tuple[str, 
     try:
         port_n = int(port)
     except ValueError:
-        raise HilConnectError(f"--hil-addr {text!r}: want HOST:PORT, e.g. 127.0.0.1:4560") from None
+        raise HilConnectError(f"--link-addr {text!r}: want HOST:PORT, e.g. 127.0.0.1:4560") from None
     if not 0 <= port_n <= 65535:
-        raise HilConnectError(f"--hil-addr {text!r}: port out of range")
+        raise HilConnectError(f"--link-addr {text!r}: port out of range")
     return host or default_host, port_n
 
 
@@ -180,7 +180,7 @@ class HilListener:
         except OSError as exc:
             raise HilConnectError(f"cannot listen on {host}:{port} ({exc.strerror or exc}): "
                                   f"another simulator may hold the port; pick one with "
-                                  f"--hil-addr HOST:PORT") from None
+                                  f"--link-addr HOST:PORT") from None
         self.sock.setblocking(False)
         self.addr = self.sock.getsockname()
 
@@ -226,7 +226,7 @@ def connect(host: str, port: int, datagram: bool, codec, timeout_s: float) -> Hi
                 raise HilConnectError(
                     f"no simulator listening on {host}:{port} after {timeout_s:g} s "
                     f"({exc.strerror or exc}): start `silbridge bridge --transport tcp` first, "
-                    f"or give its address with --hil-addr") from None
+                    f"or give its address with --link-addr") from None
             time.sleep(0.05)
 
 

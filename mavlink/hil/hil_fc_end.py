@@ -158,7 +158,7 @@ class HilFcEnd:
             if time.monotonic() > deadline:
                 raise HilPeerLost(f"no configuration from a simulator at {self.name} within "
                                   f"{timeout_s:g} s: start `silbridge bridge --transport ...` "
-                                  f"or check --hil-addr")
+                                  f"or check --link-addr")
             self.pump(0.05)
 
     # -- receive ----------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""The HIL transport over a serial line: `--hil-addr serial:/dev/ttyACM0:921600`.
+"""The HIL transport over a serial line: `--link-addr serial:/dev/ttyACM0:921600`.
 
 A flight controller board on a desk talks MAVLink on its USB or UART port; the same HIL
 messages as over TCP go on the line, framed by MAVLink 2 itself (magic byte, length, CRC),
@@ -42,7 +42,7 @@ def parse_serial(addr: str) -> tuple[str, int]:
     if not sep or not baud.isdigit():
         path, baud = rest, str(DEFAULT_BAUD)
     if not path.startswith("/"):
-        raise HilConnectError(f"--hil-addr {addr!r}: want serial:/dev/PORT[:BAUD], e.g. "
+        raise HilConnectError(f"--link-addr {addr!r}: want serial:/dev/PORT[:BAUD], e.g. "
                               f"serial:/dev/ttyACM0:921600")
     return path, int(baud)
 

@@ -1,4 +1,4 @@
-"""HIL over a serial line (`--hil-addr serial:DEV:BAUD`), end to end between the bridge and our
+"""HIL over a serial line (`--link-addr serial:DEV:BAUD`), end to end between the bridge and our
 FC as two programs, over two real pseudo-terminals joined the way a null-modem cable (or
 `socat PTY PTY`) joins two ports. Same seed -> same trace hash as over shared memory: the
 same messages, framed on the line, carry the same flight bit for bit."""
@@ -70,10 +70,10 @@ def test_bridge_and_fc_fly_over_a_serial_line_as_over_shared_memory(tmp_path):
     bridge = fc = None
     try:
         bridge = subprocess.Popen(CLI + ["bridge", *_FLIGHT, "--transport", "tcp", "--json",
-                                         "--hil-addr", f"serial:{line.names[0]}:921600"],
+                                         "--link-addr", f"serial:{line.names[0]}:921600"],
                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         fc = subprocess.Popen(CLI + ["fc", "--transport", "tcp",
-                                     "--hil-addr", f"serial:{line.names[1]}:921600"],
+                                     "--link-addr", f"serial:{line.names[1]}:921600"],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         out, err = bridge.communicate(timeout=80)
         fc.wait(timeout=20)

@@ -1,6 +1,6 @@
 """`silbridge bench --fc ardupilot` and `silbridge bridge --fc ardupilot` without and with SITL.
 
-Always run: the skip path without a binary (exit 0, says how to get one), the
+Always run: no binary (an error before any run, saying how to get one), the
 `bridge --fc ardupilot` command against a fake SITL, the bridge-side log of an
 ArduCopter flight (setpoints forwarded, JSON link timed) through the real
 integrity check and metrics, the setpoint forwarder's altitude and retry
@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import shutil
 import socket
 import subprocess
 import sys
@@ -57,21 +58,21 @@ def _env_without_sitl(tmp_path) -> dict:
     return env
 
 
-def test_bench_without_binary_skips_and_says_how_to_get_one(tmp_path):
-    if find_arducopter() is not None:
-        pytest.skip("an arducopter binary is installed here: the skip path cannot be shown")
+def test_bench_without_binary_is_an_error_that_says_how_to_get_one(tmp_path):
+    env = _env_without_sitl(tmp_path)
+    if shutil.which("arducopter", path=env["PATH"]):
+        pytest.skip("an arducopter binary is in /usr/bin here: no binary cannot be shown")
     p = subprocess.run(CLI + ["bench", "--fc", "ardupilot", "--scenarios", "S1", "--runs", "1",
-                              "--duration", "1", "--out", str(tmp_path), "--json"],
-                       capture_output=True, text=True, env=_env_without_sitl(tmp_path), timeout=60)
-    assert p.returncode == 0, p.stderr
-    assert "Traceback" not in p.stderr
+                              "--duration", "4", "--out", str(tmp_path / "out"), "--json"],
+                       capture_output=True, text=True, env=env, timeout=60)
+    assert p.returncode == 2, p.stderr
+    assert "Traceback" not in p.stderr and p.stdout == ""
     assert "SILBRIDGE_ARDUCOPTER" in p.stderr and "waf" in p.stderr
-    out = json.loads(p.stdout)
-    assert out["skipped"] is True and out["fc"] == "ardupilot"
+    assert not (tmp_path / "out").exists()      # refused before any run
 
 
 def test_bench_with_a_missing_binary_is_a_user_error(tmp_path):
-    p = subprocess.run(CLI + ["bench", "--fc", "ardupilot", "--sitl", str(tmp_path / "nope"),
+    p = subprocess.run(CLI + ["bench", "--fc", "ardupilot", "--arducopter", str(tmp_path / "nope"),
                               "--scenarios", "S1", "--runs", "1", "--out", str(tmp_path)],
                        capture_output=True, text=True, timeout=60)
     assert p.returncode == 2
@@ -88,7 +89,7 @@ def test_bridge_command_serves_a_fake_sitl():
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    proc = subprocess.Popen(CLI + ["bridge", "--fc", "ardupilot", "--sitl-address",
+    proc = subprocess.Popen(CLI + ["bridge", "--fc", "ardupilot", "--link-addr",
                                    f"127.0.0.1:{port}", "--duration", "0.2", "--json"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     sitl = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -484,7 +485,7 @@ def test_bench_run_forwards_the_s4_doublet_to_the_stand_in(tmp_path, fake_sitl_b
 
 
 def test_bench_cli_puts_both_controllers_in_one_table(tmp_path, fake_sitl_binary):
-    p = subprocess.run(CLI + ["bench", "--fc", "ours,ardupilot", "--sitl", fake_sitl_binary,
+    p = subprocess.run(CLI + ["bench", "--fc", "ours,ardupilot", "--arducopter", fake_sitl_binary,
                               "--scenarios", "S1", "--runs", "1", "--duration", "4",
                               "--jobs", "1", "--warmup", "0", "1", "--transient", "1", "2",
                               "--analysis", "2", "4", "--yaw-window", "2", "4",

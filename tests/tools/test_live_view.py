@@ -79,7 +79,7 @@ async def _listen(url: str, seconds: float) -> tuple[str, dict, dict]:
 
 def _fly_and_listen(scenario) -> tuple[int, str, tuple | None]:
     cmd = [sys.executable, "-m", "silbridge.tools", "fly", "--processes", "1", "--realtime",
-           "--no-mavlink", "--scenario", str(scenario), "--live", "127.0.0.1:0",
+           "--no-mavlink", "--scenario", str(scenario), "--duration", "6", "--live", "127.0.0.1:0",
            "--instance", f"live-{time.monotonic_ns()}"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines: list[str] = []

@@ -70,7 +70,7 @@ def test_vehicle_saves_and_reloads_its_parm_and_mission_files(tmp_path):
     def start():
         port = free_udp_port()
         v = SitlVehicle([f"udpin:127.0.0.1:{port}"], speed=4.0, processes=1,
-                        extra=["--params", str(parm), "--mission", str(wpl)])
+                        extra=["--params", str(parm), "--save-params", "--mission", str(wpl)])
         c = gcs_for(port)
         assert wait_for(c, "HEARTBEAT", timeout_s=60) is not None, v.stop()[-3000:]
         return v, c

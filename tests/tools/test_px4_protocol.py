@@ -205,10 +205,10 @@ def _env_without_px4() -> dict:
 
 def test_bench_fc_px4_without_a_binary_says_how_to_build_one(tmp_path):
     p = subprocess.run([sys.executable, "-m", "silbridge.tools", "bench", "--fc", "px4",
-                        "--scenarios", "S1", "--runs", "1", "--json", "--out", str(tmp_path)],
+                        "--scenarios", "S1", "--runs", "1", "--json", "--out",
+                        str(tmp_path / "out")],
                        capture_output=True, text=True, timeout=60, env=_env_without_px4())
-    assert p.returncode == 0
-    assert json.loads(p.stdout)["skipped"] is True
+    assert p.returncode == 2 and p.stdout == "" and not (tmp_path / "out").exists()
     assert "SILBRIDGE_PX4" in p.stderr and "make px4_sitl_default" in p.stderr
     p = subprocess.run([sys.executable, "-m", "silbridge.tools", "bench", "--fc", "px4",
                         "--px4", str(tmp_path / "nope"), "--out", str(tmp_path)],

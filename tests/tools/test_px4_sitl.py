@@ -160,7 +160,7 @@ def test_bridge_fc_px4_serves_a_px4_started_by_hand(tmp_path):
     n = pick_instance()
     work = tempfile.mkdtemp(dir=tmp_path)
     bridge = subprocess.Popen(CLI + ["bridge", "--fc", "px4", "--duration", "8", "--json",
-                                     "--hil-addr", f"127.0.0.1:{SIM_TCP_BASE + n}"],
+                                     "--link-addr", f"127.0.0.1:{SIM_TCP_BASE + n}"],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     proc = None
     try:

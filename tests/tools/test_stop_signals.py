@@ -252,7 +252,8 @@ def test_bench_stops_cleanly_and_keeps_what_ran(tmp_path, jobs, sig, group):
 def test_transport_stops_on_ctrl_c_without_leftovers(tmp_path):
     """`silbridge transport`: Ctrl-C while a transport is measured stops every child; the
     report says interrupted; exit 130; none of its segments stays (conftest checks too)."""
-    job = Job(["transport", "--imu-max", "20000", "--duration", "2", "--json"], tmp_path, "tr")
+    job = Job(["transport", "--imu-max", "20000", "--seconds-per-rate", "2", "--json"], tmp_path,
+              "tr")
     try:
         job.wait_for("IMU     1,000 Hz", timeout_s=120)
         job.killpg(signal.SIGINT)

@@ -55,12 +55,13 @@ from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 
 from silbridge.tools.autopilots.autopilot_run import AutopilotRun
+from silbridge.tools.cli.aliases import add_deprecated_alias
 from silbridge.tools.autopilots.sitl_ardupilot import (
     ARDUCOPTER,
     MAVLINK_TCP_BASE,
     PORT_STRIDE,
     SitlError,
-    find_arducopter,
+    require_arducopter,
     sitl_defaults,
     start_sitl,
     write_defaults,
@@ -292,24 +293,21 @@ def measure_bench(binary: str, *, flight_s: float) -> dict:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m silbridge.tools.autopilots.ardupilot_speed",
                                 description=__doc__.split("\n\n")[0])
-    p.add_argument("--sitl", default=None, help="arducopter binary (default "
-                   "$SILBRIDGE_ARDUCOPTER, then PATH)")
+    p.add_argument("--arducopter", default=None, metavar="PATH",
+                   help="arducopter binary (default $SILBRIDGE_ARDUCOPTER, then PATH)")
+    add_deprecated_alias(p, "--sitl", "--arducopter")
     p.add_argument("--skip", type=float, default=5.0, metavar="S",
-                   help="sim seconds of boot left out (default 5)")
+                   help="sim seconds of boot left out (default %(default)g)")
     p.add_argument("--span", type=float, default=30.0, metavar="S",
-                   help="sim seconds measured (default 30)")
+                   help="sim seconds measured (default %(default)g)")
     p.add_argument("--flight", type=float, default=30.0, metavar="S",
-                   help="flight seconds of the bench run; 0 skips it (default 30)")
+                   help="flight seconds of the bench run; 0 skips it (default %(default)g)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     args = p.parse_args(argv)
     try:
-        binary = find_arducopter(args.sitl)
+        binary = require_arducopter(args.arducopter)
     except SitlError as e:
         print(f"ardupilot_speed: {e}", file=sys.stderr)
-        return 2
-    if binary is None:
-        from silbridge.tools.autopilots.sitl_ardupilot import HOW_TO_GET
-        print(f"ardupilot_speed: {HOW_TO_GET}", file=sys.stderr)
         return 2
     ref = measure_reference(binary, skip_s=args.skip, span_s=args.span)
     idle = measure_json_idle(binary, skip_s=args.skip, span_s=args.span)

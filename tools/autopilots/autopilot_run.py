@@ -208,7 +208,7 @@ def flight_summary(fc: str, sc, res, run: AutopilotRun, sink, log_path: str, *, 
 def flight_metadata(sc, sim, *, fc: str, physics_hz: float, duration_s: float, transport: str,
                  mode: str, params: dict, software: dict, **config) -> dict:
     """A bench flight's log metadata; config: the autopilot's own entries, after the shared."""
-    from silbridge.tools.loop.flight import _version
+    from silbridge.tools.version import package_version
     return {
         "config": {
             "imu_hz": sim.imu_hz, "pwm_hz": physics_hz, "physics_hz": physics_hz,
@@ -218,5 +218,5 @@ def flight_metadata(sc, sim, *, fc: str, physics_hz: float, duration_s: float, t
         },
         "scenario": sc.to_dict(),
         "params": dict(params),
-        "software": {"silbridge": _version(), **software},
+        "software": {"silbridge": package_version(), **software},
     }

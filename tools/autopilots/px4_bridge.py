@@ -3,8 +3,8 @@
     silbridge bridge --fc px4 --realtime --duration 600      # listens on 127.0.0.1:4560
     PX4_SYS_AUTOSTART=10016 build/px4_sitl_default/bin/px4   # in PX4-Autopilot; QGC on 14550
 
-`--hil-addr HOST:PORT` moves the listening address (PX4 instance N connects to 4560 + N);
-`--hil-addr serial:/dev/ttyACM0:921600` talks to a PX4 board in HIL mode over its serial
+`--link-addr HOST:PORT` moves the listening address (PX4 instance N connects to 4560 + N);
+`--link-addr serial:/dev/ttyACM0:921600` talks to a PX4 board in HIL mode over its serial
 line instead (mavlink/hil/hil_serial.py). Lockstep is the default: PX4 in lockstep answers every
 step. With --realtime the steps follow the wall clock, so a person can watch PX4 fly our
 physics in QGroundControl.
@@ -24,11 +24,8 @@ from silbridge.tools.autopilots.sitl_px4 import SIM_TCP_BASE
 
 def run_px4_bridge(args) -> int:
     opts = options_from_args(args)
-    for flag, given in (("--transport (PX4's link is its own)", opts.transport != "shm"),
-                        ("--param/--feature-off (PX4 keeps its own parameters)",
-                         bool(opts.params or opts.features_off))):
-        if given:
-            print(f"bridge: {flag} ignored with --fc px4", file=sys.stderr)
+    # Options PX4 cannot take (--transport, --param, --feature-off) were refused by
+    # `silbridge bridge` before this point (tools/cli/cmd_bridge.py).
     out = (lambda s: print(s, file=sys.stderr)) if args.json else print
     addr = opts.hil_addr
     channel = None

@@ -129,17 +129,18 @@ def measure(binary: str, etc: str, *, ours: bool, warmup_s: float, window_s: flo
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m silbridge.tools.autopilots.px4_speed",
                                  description=__doc__.split("\n")[0])
-    ap.add_argument("--px4", default=None, help="px4 binary (default $SILBRIDGE_PX4, PATH)")
+    ap.add_argument("--px4", default=None, metavar="PATH",
+                    help="px4 binary (default $SILBRIDGE_PX4, then PATH)")
     ap.add_argument("--warmup", type=float, default=4.0, metavar="S")
     ap.add_argument("--window", type=float, default=10.0, metavar="S")
     ap.add_argument("--sih-factor", type=float, default=1000.0)
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
-    found = sp.find_px4(args.px4)
-    if found is None:
-        print(f"px4_speed: {sp.HOW_TO_GET}", file=sys.stderr)
+    try:
+        binary, etc = sp.require_px4(args.px4)
+    except sp.Px4Error as e:
+        print(f"px4_speed: {e}", file=sys.stderr)
         return 2
-    binary, etc = found
     sih = measure(binary, etc, ours=False, warmup_s=args.warmup, window_s=args.window,
                   sih_factor=args.sih_factor)
     ours = measure(binary, etc, ours=True, warmup_s=args.warmup, window_s=args.window,

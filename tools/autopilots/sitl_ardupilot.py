@@ -1,6 +1,6 @@
 """ArduCopter SITL as a subprocess, and the MAVLink driver that flies it as a user would.
 
-    binary = find_arducopter(args.sitl)            # --sitl, $SILBRIDGE_ARDUCOPTER, PATH
+    binary = require_arducopter(args.arducopter)   # --arducopter, $SILBRIDGE_ARDUCOPTER, PATH
     inst = pick_instance()                          # free MAVLink TCP + JSON UDP ports
     proc = start_sitl(binary, inst, workdir, speedup=50, home=sc.home, defaults=...)
     drv = MavlinkDriver(inst, takeoff_alt_m=10, sim_time_s=..., on_takeoff=..., target=...)
@@ -58,11 +58,12 @@ POSITION_STREAM_HZ = 10.0   # GLOBAL_POSITION_INT: the altitude the setpoint for
 SITL_LOG = "sitl.log"       # SITL's console output, in its working directory
 
 HOW_TO_GET = (
-    "no ArduCopter SITL binary: give --sitl PATH, set SILBRIDGE_ARDUCOPTER, or put "
-    "`arducopter` on PATH. Build it from source: git clone --recurse-submodules "
-    "https://github.com/ArduPilot/ardupilot && cd ardupilot && "
+    "no ArduCopter SITL binary: give --arducopter PATH, set SILBRIDGE_ARDUCOPTER, or put "
+    "`arducopter` on PATH. Build it (ArduCopter 4.6.0): git clone --recurse-submodules -b "
+    "Copter-4.6.0 https://github.com/ArduPilot/ardupilot && cd ardupilot && "
     "Tools/environment_install/install-prereqs-ubuntu.sh -y && ./waf configure --board sitl "
-    "&& ./waf copter  (binary: build/sitl/bin/arducopter); see README 'ArduCopter SITL'")
+    "&& ./waf copter  (binary: build/sitl/bin/arducopter); see "
+    "docs/tutorials/arducopter-and-px4.md")
 
 
 class SitlError(Exception):
@@ -70,8 +71,17 @@ class SitlError(Exception):
 
 
 def find_arducopter(explicit: str | None = None) -> str | None:
-    """The arducopter binary to use, or None: --sitl, then $SILBRIDGE_ARDUCOPTER, then PATH."""
+    """The arducopter binary to use, or None: --arducopter, then $SILBRIDGE_ARDUCOPTER, then
+    PATH. A given path that is not an executable file is a SitlError."""
     return find_binary(ARDUCOPTER, explicit)
+
+
+def require_arducopter(explicit: str | None = None) -> str:
+    """find_arducopter, or SitlError saying how to build one: for the commands that fly it."""
+    binary = find_arducopter(explicit)
+    if binary is None:
+        raise SitlError(HOW_TO_GET)
+    return binary
 
 
 def pick_instance(start: int | None = None, tries: int = 200) -> int:
@@ -139,7 +149,8 @@ def sitl_log_tail(workdir: str, lines: int = 8) -> str:
 
 ARDUCOPTER = Autopilot(
     name="ArduCopter", error=SitlError, env=ENV_BINARY, command="arducopter",
-    build_hint="`./waf copter` in an ArduPilot checkout (build/sitl/bin/arducopter)",
+    build_hint="`./waf copter` in an ArduPilot checkout (build/sitl/bin/arducopter; "
+               "docs/tutorials/arducopter-and-px4.md)",
     log_name=SITL_LOG, pick=pick_instance, stop=lambda proc, instance: stop_sitl(proc))
 
 

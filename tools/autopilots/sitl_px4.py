@@ -47,10 +47,11 @@ PX4_LOG = "px4.log"              # PX4's console output, in its working director
 
 HOW_TO_GET = (
     "no PX4 SITL binary: give --px4 PATH, set SILBRIDGE_PX4, or put `px4` on PATH. Build it "
-    "from source (PX4 v1.15.4): git clone --recursive -b v1.15.4 "
+    "(PX4 v1.15.4): git clone --recursive -b v1.15.4 "
     "https://github.com/PX4/PX4-Autopilot && cd PX4-Autopilot && "
     "bash Tools/setup/ubuntu.sh --no-nuttx --no-sim-tools && make px4_sitl_default  "
-    "(binary: build/px4_sitl_default/bin/px4, etc/ beside it); see README 'PX4 SITL'")
+    "(binary: build/px4_sitl_default/bin/px4, etc/ beside it); see "
+    "docs/tutorials/arducopter-and-px4.md")
 
 
 class Px4Error(Exception):
@@ -61,6 +62,14 @@ def find_px4(explicit: str | None = None) -> tuple[str, str] | None:
     """(px4 binary, its etc/ folder) or None: --px4, then $SILBRIDGE_PX4, then PATH."""
     found = find_binary(PX4, explicit)
     return (found, _etc_for(found)) if found else None
+
+
+def require_px4(explicit: str | None = None) -> tuple[str, str]:
+    """find_px4, or Px4Error saying how to build one: for the commands that fly it."""
+    found = find_px4(explicit)
+    if found is None:
+        raise Px4Error(HOW_TO_GET)
+    return found
 
 
 def _etc_for(binary: str) -> str:
@@ -285,5 +294,6 @@ def log_tail(workdir: str, lines: int = 8) -> str:
 
 PX4 = Autopilot(
     name="PX4", error=Px4Error, env=ENV_BINARY, command="px4",
-    build_hint="`make px4_sitl_default` (build/px4_sitl_default/bin/px4)",
+    build_hint="`make px4_sitl_default` in a PX4-Autopilot checkout "
+               "(build/px4_sitl_default/bin/px4; docs/tutorials/arducopter-and-px4.md)",
     log_name=PX4_LOG, pick=pick_instance, stop=stop_px4, release=release_instance)

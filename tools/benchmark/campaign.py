@@ -180,12 +180,30 @@ class Progress:
             print(line, file=sys.stderr, flush=True)
 
 
+def check_executor(executor: str, jobs: int | None, ray_address: str | None) -> None:
+    """--executor, --jobs and --ray-address together: what would be ignored is refused,
+    and the Ray extra is checked before anything runs."""
+    if executor not in ("local", "ray"):
+        raise CampaignError(f"unknown executor {executor!r}: use local or ray")
+    if jobs is not None and jobs < 1:
+        raise CampaignError("--jobs must be >= 1")
+    if ray_address and executor != "ray":
+        raise CampaignError("--ray-address is for --executor ray: add it, or leave "
+                            "--ray-address out")
+    if executor == "ray":
+        from silbridge.tools.optional_deps import require
+        require(["ray"], "ray", "--executor ray")
+        if ray_address and jobs is not None:
+            raise CampaignError("--jobs sizes the local pool or the Ray started here; a Ray "
+                                "cluster at --ray-address uses its own CPUs: leave --jobs out")
+
+
 def run_campaign(specs, *, jobs: int | None = None, executor: str = "local",
                  ray_address: str | None = None, progress: bool = True,
                  label: str = "bench") -> list[RunResult]:
     """Run every spec; results come back in spec order whatever finished first."""
     if executor == "ray":
-        results = _run_ray(specs, ray_address, progress, label)
+        results = _run_ray(specs, ray_address, progress, label, jobs)
     elif executor == "local":
         results = _run_local(specs, jobs or os.cpu_count() or 1, progress, label)
     else:
@@ -254,17 +272,18 @@ def _run_local(specs, jobs: int, progress: bool, label: str) -> list[RunResult]:
     return [results[i] for i in sorted(results)]
 
 
-def _run_ray(specs, address: str | None, progress: bool, label: str) -> list[RunResult]:
-    try:
-        import ray
-    except ImportError:
-        raise CampaignError("the Ray executor needs Ray: pip install 'silbridge[ray]'") from None
+def _run_ray(specs, address: str | None, progress: bool, label: str,
+             jobs: int | None = None) -> list[RunResult]:
+    from silbridge.tools.optional_deps import require
+    require(["ray"], "ray", "--executor ray")
+    import ray
     started_here = not ray.is_initialized()
     if started_here:
         if address:
             ray.init(address=address, log_to_driver=False)
         else:
-            ray.init(num_cpus=os.cpu_count(), include_dashboard=False, log_to_driver=False)
+            ray.init(num_cpus=jobs or os.cpu_count(), include_dashboard=False,
+                     log_to_driver=False)
     try:
         remote = ray.remote(num_cpus=1)(run_one)
         refs = [remote.remote(s) for s in specs]

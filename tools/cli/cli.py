@@ -18,11 +18,14 @@ import importlib
 import importlib.util
 import sys
 
+from silbridge.tools.version import package_version
+
 # name -> module; the order is the order of `silbridge --help`.
 COMMANDS = {
     "bridge": "cmd_bridge",
     "fc": "cmd_fc",
     "fly": "cmd_fly",
+    "sitl": "cmd_sitl",
     "bench": "cmd_bench",
     "ablate": "cmd_ablate",
     "transport": "cmd_transport",
@@ -50,6 +53,7 @@ def build_parser(commands: dict[str, str]) -> argparse.ArgumentParser:
         prog="silbridge",
         description="High-rate software-in-the-loop toolkit for multirotor flight control.",
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {package_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name, mod in commands.items():

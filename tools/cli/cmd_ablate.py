@@ -2,7 +2,8 @@
 
 Deltas are against `full`, the paper's controller with every ablated feature on
 (tools/benchmark/ablation.py), not against the declared defaults; a `defaults` row
-shows those."""
+shows those. Writes ablation.md, ablation.json and, unless --no-report, report/index.html:
+the full controller's Table 1 and plots with the deltas beside them."""
 
 from __future__ import annotations
 
@@ -13,15 +14,21 @@ from pathlib import Path
 
 from silbridge.tools.benchmark.ablation import variants
 from silbridge.tools.benchmark.campaign import make_specs, run_campaign
-from silbridge.tools.cli.cmd_bench import add_campaign_arguments, campaign_inputs
-from silbridge.tools.benchmark.table1 import ROWS, aggregate, deltas
+from silbridge.tools.benchmark.report import write_report
+from silbridge.tools.benchmark.table1 import ROWS, aggregate, deltas, markdown
+from silbridge.tools.cli.cmd_bench import add_campaign_arguments, campaign_inputs, windows_dict
 
 HELP = "ablation: the campaign with each stabilisation feature off, deltas vs the full FC"
+
+# Every variant flies the whole campaign: fewer runs than bench's 20 keep it affordable.
+DEFAULT_RUNS = 5
+DEFAULT_OUT = "ablate-out"
 
 
 def add_arguments(p) -> None:
     add_campaign_arguments(p)
-    p.set_defaults(runs=5, out="ablate-out")
+    # set_defaults also changes what --help shows: the help texts use %(default)s.
+    p.set_defaults(runs=DEFAULT_RUNS, out=DEFAULT_OUT)
 
 
 def delta_markdown(full: dict, per_variant: dict) -> str:
@@ -84,7 +91,15 @@ def run(args) -> int:
     (out_dir / "ablation.md").write_text(md + "\n")
     payload = {"variants": tables, "deltas": d, "wall_s": time.monotonic() - t0,
                "runs": args.runs, "duration_s": args.duration,
-               **(stopped if STOP.requested else {})}
+               "windows": windows_dict(windows), **(stopped if STOP.requested else {})}
     (out_dir / "ablation.json").write_text(json.dumps(payload, indent=2) + "\n")
+    if not args.no_report:
+        # The full controller's Table 1 and plots, with the deltas as a section of the page.
+        page = {**full, "runs": args.runs, "duration_s": args.duration,
+                "params": dict(params)}
+        payload["report"] = str(write_report(by_variant["full"], markdown(page), page, out_dir,
+                                             extra_sections=[("Ablation", md)]))
     print(json.dumps(payload) if args.json else md)
+    if "report" in payload and not args.json:
+        print(f"report {payload['report']}")
     return STOP.exit_code(0)

@@ -61,7 +61,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         p.add_argument(flag, nargs=2, type=_window, metavar=("A_S", "B_S"), default=default,
                        help=f"window in s of sim time (default {default[0]:g} {default[1]:g})")
     p.add_argument("--max-loss-pct", type=float, default=0.5,
-                   help="largest sample loss the integrity check accepts (default 0.5 %%)")
+                   help="largest sample loss the integrity check accepts, in %% "
+                        "(default %(default)g)")
     p.add_argument("--force", action="store_true",
                    help="compute metrics even for a log that fails the integrity check")
 

@@ -7,58 +7,81 @@ import sys
 import time
 from pathlib import Path
 
-from silbridge.tools.benchmark.campaign import CampaignError, make_specs, run_campaign
-from silbridge.tools.cli.flight_args import parse_params
+from silbridge.tools.benchmark.campaign import (CampaignError, RunSpec, check_executor,
+                                                make_specs, run_campaign)
 from silbridge.tools.benchmark.report import write_report
+from silbridge.tools.benchmark.run_params import run_params
 from silbridge.tools.benchmark.table1 import SCORING_ROWS, aggregate, markdown, scenario_key
+from silbridge.tools.benchmark.windows_fit import DEFAULTS as WINDOWS
+from silbridge.tools.benchmark.windows_fit import FLAGS as WINDOW_FLAGS
+from silbridge.tools.benchmark.windows_fit import PROTOCOL_S, fit_windows
+from silbridge.tools.cli.aliases import add_deprecated_alias
 
 HELP = "run the paper's benchmark campaign (S1..S4, N runs) and print Table 1"
 
 
 def add_campaign_arguments(p) -> None:
+    """The options `bench` and `ablate` share (ablate changes some defaults: its --help
+    shows its own, as every "(default ...)" here is argparse's %(default)s)."""
     p.add_argument("--scenarios", default="S1,S2,S3,S4",
-                   help="comma-separated scenario names or TOML files (default S1,S2,S3,S4)")
-    p.add_argument("--runs", type=int, default=20, help="runs per scenario (default 20)")
+                   help="comma-separated scenario names or TOML files (default %(default)s)")
+    p.add_argument("--runs", type=int, default=20, help="runs per scenario (default %(default)s)")
     p.add_argument("--duration", type=float, default=120.0, metavar="S",
-                   help="simulated seconds per run (default 120)")
-    p.add_argument("--seed", type=int, default=1, help="seed of run 0; run i uses seed + i")
+                   help=f"simulated seconds per run (default %(default)g); shorter than the "
+                        f"{PROTOCOL_S:g} s the default windows are made for: they are scaled "
+                        f"to fit, and said so")
+    p.add_argument("--seed", type=int, default=1,
+                   help="seed of run 0; run i uses seed + i (default %(default)s)")
     p.add_argument("--jobs", type=int, default=None,
-                   help="parallel runs (default: CPU count)")
+                   help="parallel runs: the local pool, or the CPUs of the Ray started here "
+                        "(default: CPU count)")
     p.add_argument("--executor", choices=("local", "ray"), default="local",
-                   help="local process pool (default) or a Ray cluster")
+                   help="local process pool or a Ray cluster (default %(default)s)")
     p.add_argument("--ray-address", default=None,
                    help="Ray cluster address for --executor ray (default: start a local Ray)")
-    p.add_argument("--imu-hz", type=float, default=None, help="IMU rate (default 1000)")
+    p.add_argument("--imu-hz", type=float, default=None,
+                   help="IMU rate (default: the scenario's)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                   help="FC parameter for every run, e.g. ATC_RAT_RLL_D=0.004 (repeatable)")
-    p.add_argument("--warmup", type=float, nargs=2, default=(0.0, 10.0), metavar=("A", "B"))
-    p.add_argument("--transient", type=float, nargs=2, default=(10.0, 30.0), metavar=("A", "B"))
-    p.add_argument("--analysis", type=float, nargs=2, default=(30.0, 120.0), metavar=("A", "B"))
-    p.add_argument("--yaw-window", type=float, nargs=2, default=(90.0, 120.0),
-                   metavar=("A", "B"))
-    p.add_argument("--out", default="bench-out", help="output folder (default bench-out)")
+                   help="our FC's parameter for every run, e.g. ATC_RAT_RLL_D=0.004 "
+                        "(repeatable; applied after --params)")
+    p.add_argument("--params", dest="param_file", default=None, metavar="FILE",
+                   help="ArduPilot .parm file of our FC's parameters for every run (read "
+                        "only; checked before any run)")
+    for name, flag in WINDOW_FLAGS.items():
+        a, b = getattr(WINDOWS, name)
+        # The default is the Windows tuple itself: argparse stores it as is when the flag
+        # is not given (a given window is a new list), which is how campaign_inputs tells
+        # a default window (scaled to a short run) from one the user asked for (never moved).
+        p.add_argument(flag, type=float, nargs=2, default=getattr(WINDOWS, name),
+                       metavar=("A", "B"),
+                       help=f"{name} window in s of sim time (default {a:g} {b:g}, scaled "
+                            f"to a shorter --duration); must lie inside the run")
+    p.add_argument("--out", default="bench-out", help="output folder (default %(default)s)")
     p.add_argument("--keep-logs", choices=("all", "first", "none"), default="first",
                    help="MCAP logs to keep (~45 MB per 120 s run): all, first run of each "
-                        "scenario (default; the report's traces use it), none")
-    p.add_argument("--no-report", action="store_true", help="skip the plots and index page")
+                        "scenario (the report's traces use it), none (default %(default)s)")
+    p.add_argument("--no-report", action="store_true",
+                   help="skip the plots and the index page (report/)")
     p.add_argument("--viz-hz", type=float, default=0.0, metavar="N",
-                   help="viewable /viz channels in our FC's logs at N Hz (default 0: off in "
-                        "campaigns, their cost; `fly --log` has them at 1000)")
+                   help="viewable /viz channels in our FC's logs at N Hz (default %(default)g: "
+                        "off in campaigns, their cost; `fly --log` has them at every sample)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
 def add_arguments(p) -> None:
     add_campaign_arguments(p)
     p.add_argument("--fc", default="ours", metavar="ours|ardupilot|px4|ours,ardupilot,px4",
-                   help="flight controller(s): our SIL FC (default), ArduCopter SITL over its "
-                        "JSON interface, PX4 SITL over MAVLink HIL, or several side by side in "
-                        "one Table 1")
-    p.add_argument("--sitl", default=None, metavar="PATH",
-                   help="--fc ardupilot: the arducopter binary (default: $SILBRIDGE_ARDUCOPTER, "
-                        "then `arducopter` on PATH)")
-    p.add_argument("--sitl-speedup", type=float, default=50.0, metavar="X",
-                   help="--fc ardupilot: SITL --speedup (lockstep either way; higher only lets "
-                        "SITL run ahead of the wall clock, default 50)")
+                   help="flight controller(s): our SIL FC, ArduCopter SITL over its JSON "
+                        "interface, PX4 SITL over MAVLink HIL, or several side by side in one "
+                        "Table 1 (default %(default)s); a missing binary is an error")
+    p.add_argument("--arducopter", default=None, metavar="PATH",
+                   help="--fc ardupilot: the arducopter SITL binary (default: "
+                        "$SILBRIDGE_ARDUCOPTER, then `arducopter` on PATH)")
+    add_deprecated_alias(p, "--sitl", "--arducopter")
+    p.add_argument("--speed", type=float, default=RunSpec.sitl_speedup, metavar="X",
+                   help="--fc ardupilot: SITL's --speedup (lockstep either way; higher only "
+                        "lets SITL run ahead of the wall clock) (default %(default)g)")
+    add_deprecated_alias(p, "--sitl-speedup", "--speed")
     p.add_argument("--px4", default=None, metavar="PATH",
                    help="--fc px4: the px4 SITL binary, etc/ beside its bin/ (default: "
                         "$SILBRIDGE_PX4, then `px4` on PATH)")
@@ -83,48 +106,68 @@ def fc_choice(text: str) -> list[str]:
 
 
 def campaign_inputs(args):
+    """(scenarios, windows, params) of `bench` and `ablate`, every one checked before any
+    run starts; the windows fitted to --duration (tools/benchmark/windows_fit.py)."""
     if args.runs < 1:
         raise CampaignError("--runs must be >= 1")
+    check_executor(args.executor, args.jobs, args.ray_address)   # Ray's extra first of all
     if args.duration <= 0:
         raise CampaignError("--duration must be > 0")
     scenarios = [s.strip() for s in args.scenarios.split(",") if s.strip()]
     if not scenarios:
         raise CampaignError("--scenarios is empty: name at least one, e.g. S1")
-    windows = (tuple(args.warmup), tuple(args.transient), tuple(args.analysis),
-               tuple(args.yaw_window))
-    params = tuple(sorted(parse_params(args.param).items()))
+    given = {"warmup": args.warmup, "transient": args.transient, "analysis": args.analysis,
+             "yaw": args.yaw_window}
+    fitted, note = fit_windows(args.duration, {name: None if win is getattr(WINDOWS, name)
+                                               else win for name, win in given.items()})
+    command = getattr(args, "command", None) or "bench"   # ablate shares these inputs
+
+    def say(line: str) -> None:
+        print(f"{command}: {line}", file=sys.stderr)
+    if note:
+        say(note)
+    windows = (fitted.warmup, fitted.transient, fitted.analysis, fitted.yaw)
+    params = tuple(sorted(run_params(args.param_file, args.param, say=say).items()))
     return scenarios, windows, params
 
 
-def run(args) -> int:
-    scenarios, windows, params = campaign_inputs(args)
-    fcs = fc_choice(args.fc)
-    sitl = None
+def windows_dict(windows) -> dict:
+    """The windows scored with, by name, for table1.json and ablation.json."""
+    return dict(zip(WINDOW_FLAGS, ([a, b] for a, b in windows)))
+
+
+def _autopilot_binaries(args, fcs: list[str]) -> tuple[str | None, str | None]:
+    """(arducopter, px4) for the controllers asked for: a missing one is an error with the
+    way to build it, before any run; a binary or speed given for no such run is refused."""
+    speed_given = args.speed != RunSpec.sitl_speedup
+    for flag, given, fc in (("--arducopter", args.arducopter is not None, "ardupilot"),
+                            ("--speed", speed_given, "ardupilot"),
+                            ("--px4", args.px4 is not None, "px4")):
+        if given and fc not in fcs:
+            raise CampaignError(f"{flag} is for --fc {fc} runs: add {fc} to --fc, or leave "
+                                f"{flag} out")
+    arducopter = px4 = None
     if "ardupilot" in fcs:
-        from silbridge.tools.autopilots.sitl_ardupilot import HOW_TO_GET, find_arducopter
-        sitl = find_arducopter(args.sitl)
-        if sitl is None:
-            fcs.remove("ardupilot")
-            note = f"bench --fc ardupilot skipped: {HOW_TO_GET}"
-            print(note, file=sys.stderr)
-            if not fcs:
-                if args.json:
-                    print(json.dumps({"skipped": True, "fc": "ardupilot", "reason": note}))
-                return 0
-    px4 = None
+        from silbridge.tools.autopilots.sitl_ardupilot import require_arducopter
+        arducopter = require_arducopter(args.arducopter)
     if "px4" in fcs:
-        from silbridge.tools.autopilots.sitl_px4 import HOW_TO_GET as PX4_HOW_TO_GET
-        from silbridge.tools.autopilots.sitl_px4 import find_px4
-        found = find_px4(args.px4)
-        px4 = found[0] if found else None
-        if px4 is None:
-            fcs.remove("px4")
-            note = f"bench --fc px4 skipped: {PX4_HOW_TO_GET}"
-            print(note, file=sys.stderr)
-            if not fcs:
-                if args.json:
-                    print(json.dumps({"skipped": True, "fc": "px4", "reason": note}))
-                return 0
+        from silbridge.tools.autopilots.sitl_px4 import require_px4
+        px4 = require_px4(args.px4)[0]
+    return arducopter, px4
+
+
+def run(args) -> int:
+    fcs = fc_choice(args.fc)
+    sitl, px4 = _autopilot_binaries(args, fcs)
+    scenarios, windows, params = campaign_inputs(args)
+    ours_only = [f for f, given in (("--param/--params", bool(params)),
+                                    ("--viz-hz", args.viz_hz != 0)) if given]
+    if ours_only and "ours" not in fcs:
+        raise CampaignError(f"{' and '.join(ours_only)}: for our FC's runs (ArduCopter and "
+                            f"PX4 keep their own parameters and logs): add ours to --fc, or "
+                            f"leave them out")
+    if ours_only and len(fcs) > 1:
+        print(f"bench: {' and '.join(ours_only)} apply to our FC's runs only", file=sys.stderr)
     out_dir = Path(args.out)
     specs = []
     for fc in fcs:
@@ -132,7 +175,7 @@ def run(args) -> int:
         specs += make_specs(scenarios, args.runs, args.duration, out_dir, base_seed=args.seed,
                             imu_hz=args.imu_hz, params=params if fc == "ours" else (),
                             windows=windows, keep_logs=args.keep_logs, fc=fc, sitl=sitl,
-                            sitl_speedup=args.sitl_speedup, viz_hz=args.viz_hz, px4=px4,
+                            sitl_speedup=args.speed, viz_hz=args.viz_hz, px4=px4,
                             variant="full" if fc == "ours" else fc)
     t0 = time.monotonic()
     results = run_campaign(specs, jobs=args.jobs, executor=args.executor,
@@ -158,6 +201,7 @@ def run(args) -> int:
         sc = table["scenarios"]
         table["scenarios"] = {k: sc[k] for k in sorted(sc, key=lambda k: k.split(" ")[0])}
     table.update({"runs": args.runs, "duration_s": args.duration, "wall_s": wall_s, "fc": fcs,
+                  "windows": windows_dict(windows),
                   "executor": args.executor, "params": dict(params),
                   "sim_s_total": sum(r.summary.get("sim_s", 0.0) for r in results)})
     if STOP.requested:

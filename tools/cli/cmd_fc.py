@@ -1,4 +1,8 @@
-"""`silbridge fc`: the SIL flight-controller program (attaches to a bridge's segment)."""
+"""`silbridge fc`: the SIL flight-controller program (attaches to a bridge's segment).
+
+The bridge's own --param/--feature-off/--params reach this program through
+tools/loop/fc_handover.py; this command line is applied on top of them.
+"""
 
 from __future__ import annotations
 
@@ -12,6 +16,9 @@ from silbridge.tools.cli.flight_args import (
     add_mavlink_arguments,
     add_transport_arguments,
     add_view_arguments,
+    check_link_addr,
+    check_mavlink_only,
+    check_param_file,
     mavlink_wanted,
     parse_params,
 )
@@ -23,9 +30,9 @@ HELP = "the SIL FC program: attach to a running bridge and fly its vehicle"
 
 def add_arguments(p) -> None:
     p.add_argument("--instance", default="silbridge",
-                   help="shared-memory instance name of the bridge (default silbridge)")
+                   help="shared-memory instance name of the bridge (default %(default)s)")
     p.add_argument("--attach-timeout", type=float, default=10.0, metavar="S",
-                   help="wait this long for the bridge's segment (default 10 s)")
+                   help="wait this long for the bridge's segment (default %(default)s s)")
     add_transport_arguments(p, listen=False)
     add_fc_arguments(p)
     p.add_argument("--param-at", action="append", default=[], metavar="NAME=VALUE@S",
@@ -44,9 +51,12 @@ def run(args) -> int:
     from silbridge.fc_sil.runtime import run_fc
 
     from silbridge.fc_sil.param_schedule import parse_param_at
+    from silbridge.tools.loop.fc_handover import take_handover
     from silbridge.tools.loop.fc_param_events import check_fc_param
 
     params = parse_params(args.param)
+    check_link_addr(args.transport, args.link_addr)
+    check_param_file(args.param_file, save=args.save_params, mavlink=True)   # before waiting
     try:
         events = [parse_param_at(text) for text in args.param_at]
         for ev in events:
@@ -56,19 +66,27 @@ def run(args) -> int:
     out = (lambda s: print(s, file=sys.stderr)) if args.json else print
     from silbridge.shm import lockstep as ls
 
-    with fc_segment(args.transport, args.instance, hil_addr=args.hil_addr,
+    with fc_segment(args.transport, args.instance, hil_addr=args.link_addr,
                     timeout_s=args.attach_timeout) as seg:
         # MAVLink by default when the bridge runs in real time (see add_mavlink_arguments)
         realtime = seg.word(ls.RUN_MODE) != ls.MODE_LOCKSTEP
+        # The bridge is up: take what it hands over (its file exists by now).
+        given = take_handover(args.instance)
+        params = {**given.get("params", {}), **params}
+        features_off = tuple(dict.fromkeys([*given.get("features_off", []),
+                                            *args.feature_off]))
+        param_file = args.param_file or given.get("param_file")
+        if given:
+            print(f"fc: from the bridge: {_describe(given)}", file=sys.stderr)
         mav_opts = mavlink_options(FlightOptions(
             mavlink=mavlink_wanted(args, realtime), gcs_urls=tuple(args.gcs),
-            no_default_gcs=args.no_default_gcs, param_file=args.param_file,
-            mission_file=args.mission_file, tlog=args.tlog))
-        if args.tlog and mav_opts is None:
-            raise OptionError("--tlog logs the MAVLink GCS traffic: fly the MAVLink vehicle "
-                              "(--mavlink) or leave --tlog out")
-        loop = make_fc_loop(seg, params=params, features_off=tuple(args.feature_off),
-                            mavlink=mav_opts, out=out, param_events=events)
+            no_default_gcs=args.no_default_gcs, param_file=param_file,
+            save_params=args.save_params, mission_file=args.mission_file, tlog=args.tlog))
+        check_param_file(param_file, save=args.save_params, mavlink=mav_opts is not None)
+        check_mavlink_only(args, mav_opts is not None)
+        loop = make_fc_loop(seg, params=params, features_off=features_off,
+                            mavlink=mav_opts, out=out, param_events=events,
+                            param_file=param_file)
         guard_fc(loop)
         sink = _open_log(args, loop)
         summary = None
@@ -98,6 +116,14 @@ def run(args) -> int:
         if summary.get("interrupted"):
             print(f"INTERRUPTED ({summary['interrupted']}): a partial run")
     return STOP.exit_code(0)
+
+
+def _describe(given: dict) -> str:
+    parts = [f"--param {k}={v:g}" for k, v in given.get("params", {}).items()]
+    parts += [f"--feature-off {f}" for f in given.get("features_off", [])]
+    if given.get("param_file"):
+        parts.append(f"--params {given['param_file']}")
+    return " ".join(parts)
 
 
 def _open_log(args, loop):

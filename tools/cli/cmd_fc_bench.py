@@ -25,13 +25,13 @@ BATCH_TARGET_SAMPLES_PER_S = 2_000_000.0
 def add_arguments(parser) -> None:
     parser.add_argument("--json", action="store_true", help="one JSON object on stdout")
     parser.add_argument("--samples", type=int, default=400_000,
-                        help="IMU samples per measurement (default 400000)")
+                        help="IMU samples per measurement (default %(default)s)")
     parser.add_argument("--batch", type=int, default=4096,
-                        help="records per step_batch call (default 4096)")
+                        help="records per step_batch call (default %(default)s)")
     parser.add_argument("--imu-hz", type=float, default=1000.0,
-                        help="IMU rate of the synthetic stream (default 1000)")
+                        help="IMU rate of the synthetic stream (default %(default)g)")
     parser.add_argument("--repeat", type=int, default=3,
-                        help="repetitions; the best is reported (default 3)")
+                        help="repetitions; the best is reported (default %(default)s)")
 
 
 def _record_mix(n_imu: int, imu_hz: float) -> np.ndarray:

@@ -1,4 +1,8 @@
-"""`silbridge fly`: the bridge and the SIL FC together, one flight."""
+"""`silbridge fly`: the bridge and the SIL FC together, one flight.
+
+The lockstep benchmark flight by default: no MAVLink, so a ground station sees nothing;
+`silbridge sitl` is the vehicle for QGroundControl (said once on stderr).
+"""
 
 from __future__ import annotations
 
@@ -6,9 +10,17 @@ import json
 import sys
 
 from silbridge.tools.loop.flight import fly_one_process, fly_two_processes, print_summary
-from silbridge.tools.cli.flight_args import add_flight_arguments, add_mavlink_arguments, options_from_args
+from silbridge.tools.cli.flight_args import (
+    add_flight_arguments,
+    add_mavlink_arguments,
+    check_link_addr,
+    options_from_args,
+)
 
 HELP = "fly the closed loop: simulator and SIL FC in one or two processes"
+
+NO_MAVLINK_HINT = ("no MAVLink in lockstep: for a vehicle in QGroundControl run "
+                   "`silbridge sitl`")
 
 
 def add_arguments(p) -> None:
@@ -18,6 +30,9 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     opts = options_from_args(args)
+    check_link_addr(opts.transport, args.link_addr)
+    if opts.lockstep and args.mavlink is None:
+        print(f"silbridge fly: {NO_MAVLINK_HINT}", file=sys.stderr)
     # Progress lines go to stderr under --json so stdout stays one JSON object.
     out = (lambda s: print(s, file=sys.stderr)) if args.json else print
     fly = fly_one_process if opts.processes == 1 else fly_two_processes

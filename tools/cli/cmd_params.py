@@ -3,7 +3,7 @@
     silbridge params list [--file F.parm] [--match TEXT]   names, values, units, ranges
     silbridge params show NAME [--file F.parm]              one parameter in full
     silbridge params diff FILE [FILE2]                      FILE against the defaults, or FILE2
-    silbridge params export [--format parm|json|md] [--file F.parm] [--output PATH]
+    silbridge params export [--format parm|json|md] [--file F.parm] [--out PATH]
 
 Values are the declared defaults unless `--file` gives an ArduPilot .parm file (as `silbridge
 fc --params FILE` saves it); a file's values are validated exactly as the FC would apply them,
@@ -16,6 +16,8 @@ import argparse
 import json
 import os
 import sys
+
+from silbridge.tools.cli.aliases import add_deprecated_alias
 
 HELP = "list, show, diff and export the flight-controller parameters"
 
@@ -47,9 +49,12 @@ def add_arguments(p) -> None:
     dp.add_argument("file2", nargs="?")
     _json_flag(dp)
     ep = sub.add_parser("export", help="write the parameter set as .parm, JSON or Markdown")
-    ep.add_argument("--format", choices=("parm", "json", "md"), default="parm")
+    ep.add_argument("--format", choices=("parm", "json", "md"), default="parm",
+                    help="file format (default %(default)s)")
     ep.add_argument("--file", help="values from this .parm file (default: the defaults)")
-    ep.add_argument("--output", "-o", help="write here (atomically for .parm); default stdout")
+    ep.add_argument("--out", "-o", metavar="FILE",
+                    help="write here (atomically for .parm) (default: stdout)")
+    add_deprecated_alias(ep, "--output", "--out")
     _json_flag(ep)
 
 
@@ -163,8 +168,8 @@ def _export(args) -> int:
     values, problems = _values(args.file)
     if args.format == "parm":
         entries = [(p.name, values[p.name], p.mav_type) for p in P.PARAMS]
-        if args.output:
-            save_parm(args.output, entries)
+        if args.out:
+            save_parm(args.out, entries)
             text = None
         else:
             text = format_parm(entries)
@@ -172,14 +177,14 @@ def _export(args) -> int:
         text = json.dumps({p.name: values[p.name] for p in P.PARAMS}, indent=1) + "\n"
     else:
         text = _markdown(values)
-    if text is not None and args.output:
-        with open(args.output, "w", encoding="utf-8") as f:
+    if text is not None and args.out:
+        with open(args.out, "w", encoding="utf-8") as f:
             f.write(text)
     if args.json:
-        print(json.dumps({"format": args.format, "output": args.output, "count": len(values),
+        print(json.dumps({"format": args.format, "output": args.out, "count": len(values),
                           "problems": problems,
-                          **({} if args.output else {"text": text})}))
-    elif text is not None and not args.output:
+                          **({} if args.out else {"text": text})}))
+    elif text is not None and not args.out:
         sys.stdout.write(text)
     for msg in problems:
         print(f"refused: {msg}", file=sys.stderr)

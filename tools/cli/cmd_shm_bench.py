@@ -23,7 +23,7 @@ TARGET_ONE_WAY_P50_NS = 2_000
 
 def add_arguments(parser) -> None:
     parser.add_argument("--seconds", type=float, default=1.0,
-                        help="duration of each of the 8 phases [s] (default 1.0)")
+                        help="duration of each of the 8 phases [s] (default %(default)g)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 

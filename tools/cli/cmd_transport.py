@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import sys
 
+from silbridge.tools.cli.aliases import add_deprecated_alias
 from silbridge.tools.transport.transport_bench import (
     DEFAULT_DURATION_S,
     DEFAULT_IMU_MAX_HZ,
@@ -29,10 +30,14 @@ def add_arguments(p) -> None:
                         f"(default {','.join(DEFAULT_TRANSPORTS)}); '-nofastcrc' runs pymavlink "
                         f"with its pure-Python CRC")
     p.add_argument("--imu-max", type=float, default=DEFAULT_IMU_MAX_HZ, metavar="HZ",
-                   help=f"highest IMU step (default {DEFAULT_IMU_MAX_HZ:,}); steps 1k, 2k, 5k, "
-                        f"10k, ...")
-    p.add_argument("--duration", type=float, default=DEFAULT_DURATION_S, metavar="S",
-                   help=f"wall seconds per step (default {DEFAULT_DURATION_S:g})")
+                   help="highest IMU step (default %(default)d); steps 1k, 2k, 5k, 10k, ...")
+    # Wall seconds, not the simulated seconds --duration means everywhere else: a step that
+    # cannot keep up with the wall clock simulates less than it lasts. The old spelling
+    # `--duration` (same meaning) stays a hidden alias for one release.
+    p.add_argument("--seconds-per-rate", type=float, default=DEFAULT_DURATION_S, metavar="S",
+                   help="wall-clock seconds each transport runs at each IMU rate "
+                        "(default %(default)g)")
+    add_deprecated_alias(p, "--duration", "--seconds-per-rate")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="write transport.json, transport.md and two PNG plots here")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -40,11 +45,11 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     from silbridge.tools.transport.transport_bench import TransportBenchError
-    if args.duration <= 0:
-        raise TransportBenchError("--duration must be > 0")
+    if args.seconds_per_rate <= 0:
+        raise TransportBenchError("--seconds-per-rate must be > 0")
     cfg = TransportBenchConfig(
         transports=tuple(t.strip() for t in args.transports.split(",") if t.strip()),
-        imu_max_hz=int(args.imu_max), duration_s=args.duration, out_dir=args.out)
+        imu_max_hz=int(args.imu_max), duration_s=args.seconds_per_rate, out_dir=args.out)
     from silbridge.tools.loop.stop_signals import STOP
     with STOP.polling():
         report = run_comparison(cfg, out=lambda s: print(s, file=sys.stderr), stop=STOP)

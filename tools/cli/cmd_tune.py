@@ -17,23 +17,28 @@ import math
 import sys
 from pathlib import Path
 
-from silbridge.tools.cli.flight_args import parse_params
+from silbridge.tools.cli.aliases import add_deprecated_alias
+from silbridge.tools.tune import tune_defaults as D
 
 HELP = "identify and tune the attitude loops: sweeps, margins, steps, autotune"
 
 
 def _common(p, default_out: str) -> None:
-    p.add_argument("--axis", default="roll", help="roll, pitch, yaw or a comma list")
+    p.add_argument("--axis", default="roll",
+                   help="roll, pitch, yaw or a comma list (default %(default)s)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                   help="FC parameter for every flight (repeatable)")
+                   help="FC parameter for every flight (repeatable; applied after --params)")
     p.add_argument("--params", dest="param_file", default=None, metavar="FILE",
-                   help="ArduPilot .parm file whose values every flight uses")
-    p.add_argument("--seed", type=int, default=1, help="scenario seed (default 1)")
-    p.add_argument("--jobs", type=int, default=None, help="parallel flights (default: CPUs)")
+                   help="ArduPilot .parm file whose values every flight uses (read only)")
+    p.add_argument("--seed", type=int, default=1, help="scenario seed (default %(default)s)")
+    p.add_argument("--jobs", type=int, default=None,
+                   help="parallel flights: the local pool, or the CPUs of the Ray started "
+                        "here (default: CPU count)")
     p.add_argument("--executor", choices=("local", "ray"), default="local",
-                   help="local process pool (default) or a Ray cluster")
-    p.add_argument("--ray-address", default=None, help="Ray address for --executor ray")
-    p.add_argument("--out", default=default_out, help=f"report folder (default {default_out})")
+                   help="local process pool or a Ray cluster (default %(default)s)")
+    p.add_argument("--ray-address", default=None,
+                   help="Ray address for --executor ray (default: start a local Ray)")
+    p.add_argument("--out", default=default_out, help="report folder (default %(default)s)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -43,28 +48,38 @@ def add_arguments(p) -> None:
     s = sub.add_parser("sysid", help="frequency sweep: plant, loops, margins, bandwidth")
     _common(s, "tune-out/sysid")
     s.add_argument("--inject", choices=("output", "input", "both"), default="both",
-                   help="mixer input (margins), rate target (bandwidth) or both (default)")
-    s.add_argument("--f-start", type=float, default=None, help="SID_F_START_HZ (default 0.5)")
-    s.add_argument("--f-stop", type=float, default=None, help="SID_F_STOP_HZ (default 40)")
-    s.add_argument("--t-rec", type=float, default=None, help="SID_T_REC [s] (default 40)")
-    s.add_argument("--fade-in", type=float, default=None, help="SID_T_FADE_IN [s] (default 5)")
-    s.add_argument("--magnitude-rate", type=float, default=None,
-                   help="SID_MAGNITUDE of the rate sweep [deg/s] (default 15)")
-    s.add_argument("--magnitude-mixer", type=float, default=None,
-                   help="SID_MAGNITUDE of the mixer sweep [0-1] (default 0.05)")
+                   help="mixer input (margins), rate target (bandwidth) or both "
+                        "(default %(default)s)")
+    for flag, default, what in (
+            ("--f-start", D.SWEEP_F_START_HZ, "SID_F_START_HZ [Hz]"),
+            ("--f-stop", D.SWEEP_F_STOP_HZ, "SID_F_STOP_HZ [Hz]"),
+            ("--t-rec", D.SWEEP_T_REC_S, "SID_T_REC [s]"),
+            ("--fade-in", D.SWEEP_T_FADE_IN_S, "SID_T_FADE_IN [s]"),
+            ("--magnitude-rate", D.SWEEP_MAGNITUDE_RATE_DPS,
+             "SID_MAGNITUDE of the rate sweep [deg/s]"),
+            ("--magnitude-mixer", D.SWEEP_MAGNITUDE_MIXER,
+             "SID_MAGNITUDE of the mixer sweep [0-1]")):
+        s.add_argument(flag, type=float, default=default, help=what + " (default %(default)g)")
     t = sub.add_parser("step", help="step and doublet responses per axis")
     _common(t, "tune-out/step")
-    t.add_argument("--amplitude", type=float, default=10.0, help="step size [deg] (default 10)")
-    t.add_argument("--hold", type=float, default=1.5, help="hold per level [s] (default 1.5)")
-    t.add_argument("--repeat", type=int, default=2, help="doublets per axis (default 2)")
+    t.add_argument("--amplitude", type=float, default=D.STEP_AMPLITUDE_DEG,
+                   help="step size [deg] (default %(default)g)")
+    t.add_argument("--hold", type=float, default=D.STEP_HOLD_S,
+                   help="hold per level [s] (default %(default)g)")
+    t.add_argument("--repeat", type=int, default=D.STEP_REPEAT,
+                   help="doublets per axis (default %(default)s)")
     a = sub.add_parser("auto", help="search gains and filters; write a .parm and Table 1")
     _common(a, "tune-out/auto")
-    a.add_argument("--trials", type=int, default=60, help="candidates flown (default 60)")
-    a.add_argument("--runs", type=int, default=3,
-                   help="seeds per scenario in the before/after Table 1 (default 3)")
-    a.add_argument("--batch", type=int, default=2, help="candidates flown together (default 2)")
-    a.add_argument("--pm-min", type=float, default=45.0, help="phase margin floor [deg]")
-    a.add_argument("--gm-min", type=float, default=6.0, help="gain margin floor [dB]")
+    a.add_argument("--trials", type=int, default=D.AUTO_TRIALS,
+                   help="candidates flown (default %(default)s)")
+    a.add_argument("--runs", type=int, default=D.AUTO_RUNS,
+                   help="seeds per scenario in the before/after Table 1 (default %(default)s)")
+    a.add_argument("--batch", type=int, default=D.AUTO_BATCH,
+                   help="candidates flown together (default %(default)s)")
+    a.add_argument("--pm-min", type=float, default=D.PM_MIN_DEG,
+                   help="phase margin floor [deg] (default %(default)g)")
+    a.add_argument("--gm-min", type=float, default=D.GM_MIN_DB,
+                   help="gain margin floor [dB] (default %(default)g)")
     a.add_argument("--no-progress", action="store_true", help="no progress bar")
     a.add_argument("--compare", action="append", default=[], metavar="FILE.parm",
                    help="another gain set (e.g. tune anchor's arducopter_autotune.parm) scored "
@@ -75,12 +90,16 @@ def add_arguments(p) -> None:
     n = sub.add_parser("anchor", help="fly ArduCopter's own AUTOTUNE on our physics; its "
                                       "gains through Table 1 and the margins")
     _common(n, "tune-out/anchor")
-    n.add_argument("--sitl", default=None, metavar="PATH",
-                   help="arducopter binary (default: $SILBRIDGE_ARDUCOPTER, then PATH)")
-    n.add_argument("--runs", type=int, default=3, help="seeds per scenario (default 3)")
+    n.add_argument("--arducopter", default=None, metavar="PATH",
+                   help="the arducopter SITL binary (default: $SILBRIDGE_ARDUCOPTER, then "
+                        "`arducopter` on PATH); a missing one is an error")
+    add_deprecated_alias(n, "--sitl", "--arducopter")
+    n.add_argument("--runs", type=int, default=D.AUTO_RUNS,
+                   help="seeds per scenario (default %(default)s)")
     n.add_argument("--ours", default=None, metavar="FILE",
                    help="our tuned .parm (tune auto) for a third column")
-    n.add_argument("--aggr", type=float, default=0.1, help="AUTOTUNE_AGGR (default 0.1)")
+    n.add_argument("--aggr", type=float, default=D.AUTOTUNE_AGGR,
+                   help="AUTOTUNE_AGGR (default %(default)g)")
 
 
 class TuneArgsError(Exception):
@@ -97,17 +116,10 @@ def _axes(text: str) -> tuple:
 
 
 def _base_params(args) -> dict:
-    from silbridge.fc_sil.flight_core import FlightCore
-    from silbridge.mavlink.gcs.params_file import load_parm
-
-    params = {}
-    if args.param_file:
-        params.update({n.upper(): v for n, v in load_parm(args.param_file)})
-    params.update(parse_params(args.param))
-    core = FlightCore()
-    for name, value in params.items():      # refuse what the FC would refuse, up front
-        core.set_param(name, value)
-    return params
+    """--params FILE then --param, checked up front as the FC applies them (run_params)."""
+    from silbridge.tools.benchmark.run_params import run_params
+    return run_params(args.param_file, args.param,
+                      say=lambda line: print(f"tune: {line}", file=sys.stderr))
 
 
 def _clean(v):
@@ -121,19 +133,24 @@ def _clean(v):
 
 
 def _need(modules) -> None:
-    import importlib.util
-    missing = [m for m in modules if importlib.util.find_spec(m) is None]
-    if missing:
-        raise TuneArgsError(f"`silbridge tune` needs {', '.join(missing)}: "
-                            f"pip install 'silbridge[tune]'")
+    from silbridge.tools.optional_deps import require
+    require(modules, "tune", "`silbridge tune`")
 
 
 def run(args) -> int:
+    from silbridge.tools.benchmark.campaign import check_executor
     from silbridge.tools.tune.tune_exec import TaskPool
 
     _need(("scipy", "matplotlib") + (("optuna", "tqdm") if args.action == "auto" else ()))
+    check_executor(args.executor, args.jobs, args.ray_address)
     axes = _axes(args.axis)
     base = _base_params(args)
+    if args.action == "anchor":      # the binary first: a missing one stops before any flight
+        from silbridge.tools.autopilots.sitl_ardupilot import require_arducopter
+        args.arducopter = require_arducopter(args.arducopter)
+        if args.ours and not Path(args.ours).is_file():
+            raise TuneArgsError(f"--ours {args.ours}: no such file; give the .parm file "
+                                f"`silbridge tune auto` wrote")
     out_dir = Path(args.out)
     say = (lambda s: print(s, file=sys.stderr)) if args.json else print
     with TaskPool(args.jobs, args.executor, args.ray_address) as pool:

@@ -10,6 +10,7 @@ issue fixes for `fly --json`.
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -21,6 +22,7 @@ from silbridge.bridge.simulator import Simulator
 
 from silbridge.tools.loop.fc_param_events import load_flight_scenario, param_at_args, param_events
 from silbridge.tools.loop.stop_signals import STOP
+from silbridge.tools.version import package_version
 from silbridge.tools.loop.transport_wiring import (
     bridge_address,
     bridge_segment,
@@ -36,7 +38,7 @@ _NS = 1_000_000_000
 @dataclass
 class FlightOptions:
     scenario: str = "S1"
-    duration_s: float | None = None     # None: the scenario's duration
+    duration_s: float | None = None     # None: the scenario's duration; inf: until stopped
     lockstep: bool = True
     speed: float = 1.0
     busy_wait: bool = False             # real time: spin between steps, never sleep
@@ -50,7 +52,8 @@ class FlightOptions:
     mavlink: bool = False               # the MAVLink vehicle (GCS control) instead of AutoFlight
     gcs_urls: tuple = ()                # extra --gcs endpoints
     no_default_gcs: bool = False        # leave out udpout 127.0.0.1:14550 and :14540
-    param_file: str | None = None       # --params FILE (.parm)
+    param_file: str | None = None       # --params FILE (.parm), read at start in every mode
+    save_params: bool = False           # --save-params: GCS PARAM_SETs written back to it
     mission_file: str | None = None     # --mission FILE (QGC WPL 110)
     transport: str = "shm"              # shm | udp | tcp (MAVLink HIL, tools/loop/transport_wiring.py)
     hil_addr: str | None = None         # udp/tcp: the bridge's listen address (default: any port)
@@ -77,8 +80,11 @@ def bridge_config(opts: FlightOptions, sc) -> BridgeRunConfig:
 
 
 def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
-                 mavlink=None, out=None, param_events=()):
+                 mavlink=None, out=None, param_events=(), param_file: str | None = None):
     """The FC side: FlightCore with parameters applied, wrapped in an FcLoop.
+
+    Parameters: the declared defaults, then param_file (--params, read-only), then params
+    (--param), then the features switched off; the same with or without MAVLink.
 
     param_events: fc_sil.param_schedule.ParamEvent changes due at sim times (a scenario's
     [[fc_param]] entries).
@@ -100,6 +106,11 @@ def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
         from silbridge.fc_sil.vehicle_server import start_mavlink_vehicle
         vehicle = start_mavlink_vehicle(core, mavlink, overrides=overrides, sink=sink, out=out)
         return FcLoop(core, seg, supervisor=vehicle, sink=sink, schedule=schedule)
+    if param_file:
+        from silbridge.fc_sil.vehicle_server import load_start_params
+        _, problems = load_start_params(core, param_file)
+        for p in problems:
+            (out or print)(f"parameter file: {p}")
     for name, value in overrides.items():
         core.set_param(name, value)
     return FcLoop(core, seg, supervisor=AutoFlight(core, sink=sink), sink=sink,
@@ -115,8 +126,8 @@ def mavlink_options(opts: FlightOptions):
     urls = [] if opts.no_default_gcs else list(DEFAULT_GCS_URLS)
     urls += [u for u in opts.gcs_urls if u not in urls]
     return MavlinkOptions(endpoints=[parse_endpoint(u) for u in urls],
-                          param_file=opts.param_file, mission_file=opts.mission_file,
-                          tlog=opts.tlog)
+                          param_file=opts.param_file, save_params=opts.save_params,
+                          mission_file=opts.mission_file, tlog=opts.tlog)
 
 
 def mavlink_cli_args(opts: FlightOptions) -> list[str]:
@@ -128,8 +139,8 @@ def mavlink_cli_args(opts: FlightOptions) -> list[str]:
         args += ["--gcs", url]
     if opts.no_default_gcs:
         args.append("--no-default-gcs")
-    if opts.param_file:
-        args += ["--params", opts.param_file]
+    if opts.save_params:
+        args.append("--save-params")
     if opts.mission_file:
         args += ["--mission", opts.mission_file]
     if opts.tlog:
@@ -151,23 +162,17 @@ def run_metadata(opts: FlightOptions, sc, sim, cfg, core) -> dict:
         "config": {
             "imu_hz": sim.imu_hz, "pwm_hz": cfg.pwm_hz, "physics_hz": _NS / sim.dt_ns,
             "baro_hz": sc.baro_hz, "mag_hz": sc.mag_hz, "gnss_hz": sc.gnss_hz,
-            "duration_s": cfg.duration_s, "seed": sc.seed, "transport": opts.transport,
+            # null: until stopped (real time); the log's end says where it stopped
+            "duration_s": cfg.duration_s if math.isfinite(cfg.duration_s) else None,
+            "seed": sc.seed, "transport": opts.transport,
             "processes": opts.processes,
             "mode": "lockstep" if opts.lockstep else f"realtime x{opts.speed:g}",
             "features_off": list(opts.features_off),
         },
         "scenario": sc.to_dict(),
         "params": core.params() if core is not None else {},
-        "software": {"silbridge": _version()},
+        "software": {"silbridge": package_version()},
     }
-
-
-def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-    try:
-        return version("silbridge")
-    except PackageNotFoundError:
-        return "unknown"
 
 
 def fly_one_process(opts: FlightOptions, out=print) -> dict:
@@ -182,7 +187,7 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
         with fc_segment(opts.transport, name, hil_addr=fc_addr, wait_config=False) as fc_seg:
             fc = make_fc_loop(fc_seg, params=opts.params, features_off=opts.features_off,
                               mavlink=mavlink_options(opts), out=out,
-                              param_events=param_events(sc))
+                              param_events=param_events(sc), param_file=opts.param_file)
             guard_fc(fc)
             if opts.log_path or opts.live is not None:
                 from silbridge.tools.loop.run_log import open_run_sink
@@ -246,6 +251,8 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
         prepare_segment(seg, sim, cfg)
         cmd = [sys.executable, "-m", "silbridge.tools", "fc", "--instance", name, "--json"]
         cmd += fc_cli_args(opts.transport, seg)
+        if opts.param_file:
+            cmd += ["--params", opts.param_file]
         for pname, value in (opts.params or {}).items():
             cmd += ["--param", f"{pname}={value}"]
         for feature in opts.features_off:
@@ -330,6 +337,9 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         "e2e_us": fc_summary.get("e2e_us", {"p50": None, "p99": None}),
         "attitude_rms_deg": res.attitude_rms_deg,
         "altitude_rms_m": res.altitude_rms_m,
+        # The sim-time span those two RMS cover: after the settle time to the end of the run
+        # (not the paper's analysis window that `silbridge analyze` scores).
+        "rms_window_s": [bridge_config(opts, sc).settle_s, res.sim_s],
         "trace_hash": res.trace_hash,
         "crashed": res.crashed,
         "scenario": sc.name,
@@ -359,8 +369,10 @@ def print_summary(s: dict, out=print) -> None:
     out(f"ring   overwritten {s['overwritten']}  rejected {s['rejected']}")
     out(f"sensor->FC latency p50 {f(lat['p50'])} us  p99 {f(lat['p99'])} us;  "
         f"loop jitter p50 {f(jit['p50'])} us  p99 {f(jit['p99'])} us")
-    out(f"attitude RMS {f(s['attitude_rms_deg'], '{:.3f}')} deg  altitude RMS "
-        f"{f(s['altitude_rms_m'], '{:.3f}')} m  crashed {s['crashed']}")
+    a, b = s["rms_window_s"]
+    out(f"error RMS over {a:g}-{round(b, 3):g} s (whole run after settling): attitude "
+        f"{f(s['attitude_rms_deg'], '{:.3f}')} deg  altitude {f(s['altitude_rms_m'], '{:.3f}')} m"
+        f"  crashed {s['crashed']}")
     out(f"trace hash {s['trace_hash']}")
     if s.get("interrupted"):
         out(f"INTERRUPTED by {s['interrupted']} at {s['sim_s']:.2f} s of sim time: a partial run")

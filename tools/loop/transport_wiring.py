@@ -20,8 +20,11 @@ def hil_origin(sim) -> tuple[int, int, int]:
             round((fdm.ground_alt_m + fdm.home_agl_m) * 1000.0))
 
 
+HIL_PORT = 4560     # the simulator's listening port (PX4's convention; instance N: + N)
+
+
 def bridge_segment(transport: str, name: str, sim, *, hil_addr: str | None = None,
-                   default_port: int = 4560):
+                   default_port: int = HIL_PORT):
     """The bridge's segment (a context manager): Segment.create or a listening HilBridgeEnd."""
     if transport == "shm":
         return Segment.create(name)
@@ -68,7 +71,7 @@ def fc_cli_args(transport: str, seg) -> list[str]:
     """`silbridge fc` options that reach this bridge."""
     if transport == "shm":
         return []
-    return ["--transport", transport, "--hil-addr", bridge_address(seg)]
+    return ["--transport", transport, "--link-addr", bridge_address(seg)]
 
 
 def in_process_poll(fc, fc_seg, seg, sim, lockstep: bool):

@@ -393,7 +393,8 @@ def run_comparison(cfg: TransportBenchConfig, out=print, stop=_NeverStop) -> dic
             fastcrc = VARIANTS[variant][1]
             if fastcrc not in runners:
                 cmd = [sys.executable, "-m", "silbridge.tools.transport.transport_child", "runner",
-                       "--steps", ",".join(map(str, steps)), "--duration", str(cfg.duration_s)]
+                       "--steps", ",".join(map(str, steps)),
+                       "--seconds-per-rate", str(cfg.duration_s)]
                 if not fastcrc:
                     cmd.append("--no-fastcrc")
                 crc = "fastcrc" if fastcrc else "pure-Python-CRC"

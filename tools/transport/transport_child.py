@@ -1,6 +1,7 @@
 """Entry of the transport comparison's child processes (tools/transport/transport_bench.py).
 
-    python -m silbridge.tools.transport.transport_child runner --steps 1000,2000 --duration S
+    python -m silbridge.tools.transport.transport_child runner --steps 1000,2000 \
+        --seconds-per-rate S
     python -m silbridge.tools.transport.transport_child fc
     ... [--no-fastcrc]
 
@@ -29,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     sub = p.add_subparsers(dest="role", required=True)
     r = sub.add_parser("runner")
     r.add_argument("--steps", required=True)
-    r.add_argument("--duration", type=float, required=True)
+    r.add_argument("--seconds-per-rate", type=float, required=True)
     r.add_argument("--no-fastcrc", action="store_true")
     f = sub.add_parser("fc")
     f.add_argument("--no-fastcrc", action="store_true")
@@ -51,7 +52,7 @@ def _serve(args, proto, serve_fc, serve_runner) -> int:
     if args.role == "fc":
         return serve_fc(proto=proto)
     steps = [int(x) for x in args.steps.split(",") if x]
-    return serve_runner(steps, args.duration, not args.no_fastcrc, proto=proto)
+    return serve_runner(steps, args.seconds_per_rate, not args.no_fastcrc, proto=proto)
 
 
 if __name__ == "__main__":

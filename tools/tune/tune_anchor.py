@@ -25,6 +25,7 @@ from silbridge.bridge.ardupilot_server import JsonPhysicsServer
 from silbridge.bridge.link_spin import spin_budget_us
 
 from silbridge.tools.autopilots.ardupilot_log import AttitudeTarget
+from silbridge.tools.tune.tune_defaults import AUTOTUNE_AGGR
 from silbridge.tools.autopilots.autopilot_run import AutopilotRun, scenario_factory
 from silbridge.tools.autopilots.sitl_ardupilot import (
     ARDUCOPTER,
@@ -148,7 +149,8 @@ class AutotuneDriver(MavlinkDriver):
             self._command(mav.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, self.takeoff_alt_m)
 
 
-def run_autotune(binary: str, *, axes_mask: int = 3, aggr: float = 0.1, scenario: str = "S1",
+def run_autotune(binary: str, *, axes_mask: int = 3, aggr: float = AUTOTUNE_AGGR,
+                 scenario: str = "S1",
                  seed: int = 1, speedup: float = 50.0, budget_sim_s: float = 1500.0,
                  keep_dir: bool = False) -> dict:
     """Fly ArduCopter's AUTOTUNE on our physics; returns its saved gains and timings."""

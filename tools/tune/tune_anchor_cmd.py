@@ -20,16 +20,14 @@ from silbridge.tools.tune.tune_sysid import SweepConfig, TuneError
 def run_anchor(args, axes, base: dict, out_dir: Path, pool, say) -> dict:
     from silbridge.mavlink.gcs.params_file import load_parm
 
-    from silbridge.tools.autopilots.sitl_ardupilot import HOW_TO_GET, find_arducopter
+    from silbridge.tools.autopilots.sitl_ardupilot import require_arducopter
     from silbridge.tools.benchmark.table1 import markdown
     from silbridge.tools.tune.tune_anchor import (AXIS_BITS, for_our_fc, run_autotune,
                                                   within_documented)
     from silbridge.tools.tune.tune_parm import write_parm
     from silbridge.tools.tune.tune_report import write_index
 
-    binary = find_arducopter(args.sitl)
-    if binary is None:
-        raise TuneError(HOW_TO_GET)
+    binary = require_arducopter(args.arducopter)
     if args.runs < 1:
         raise TuneError("--runs must be >= 1")
     out_dir.mkdir(parents=True, exist_ok=True)

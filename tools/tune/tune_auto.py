@@ -45,10 +45,11 @@ from pathlib import Path
 from silbridge.fc_sil import params as P
 
 from silbridge.tools.benchmark.campaign import RunSpec, run_one
+from silbridge.tools.tune import tune_defaults as D
 from silbridge.tools.tune.tune_sysid import SweepConfig, TuneError, summarise_axis, sysid_task
 
-PM_MIN = 45.0
-GM_MIN = 6.0
+PM_MIN = D.PM_MIN_DEG
+GM_MIN = D.GM_MIN_DB
 CHECKS = 3
 TRACK_KEYS = ("att_rms_cmd_deg", "att_rms_deg")
 SMOOTH_KEY = "pwm_pp_us"
@@ -111,10 +112,10 @@ def search_space(axes, input_tc: bool = True) -> dict[str, tuple[float, float, b
 @dataclass(frozen=True)
 class AutoConfig:
     axes: tuple = ("roll", "pitch")
-    trials: int = 60
-    runs: int = 3                  # seeds per scenario in the before/after Table 1
+    trials: int = D.AUTO_TRIALS
+    runs: int = D.AUTO_RUNS        # seeds per scenario in the before/after Table 1
     seed: int = 1
-    batch: int = 2                 # trials evaluated together (keeps every worker busy)
+    batch: int = D.AUTO_BATCH      # trials evaluated together (keeps every worker busy)
     base_params: tuple = ()        # fixed overrides under the search ((name, value), ...)
     sweep: SweepConfig = field(default_factory=lambda: SweepConfig(
         f_start_hz=1.0, t_fade_in_s=3.0, t_rec_s=25.0, sweep_at_s=12.0))

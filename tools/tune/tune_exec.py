@@ -27,11 +27,9 @@ class TaskPool:
         self._ray = None
         self._ray_started = False
         if executor == "ray":
-            try:
-                import ray
-            except ImportError:
-                raise CampaignError("the Ray executor needs Ray: pip install 'silbridge[ray]'") \
-                    from None
+            from silbridge.tools.optional_deps import require
+            require(["ray"], "ray", "--executor ray")
+            import ray
             self._ray = ray
             if not ray.is_initialized():
                 kw = {"address": ray_address} if ray_address else {

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from silbridge.tools.tune import tune_defaults as D
 from silbridge.tools.tune.tune_flight import CaptureSpec, fly_captured
 from silbridge.tools.tune.tune_sysid import AXES, TuneError
 
@@ -30,9 +31,9 @@ YAW_HOLD_P = 4.5
 
 @dataclass(frozen=True)
 class StepConfig:
-    amplitude_deg: float = 10.0
-    hold_s: float = 1.5
-    repeat: int = 2
+    amplitude_deg: float = D.STEP_AMPLITUDE_DEG
+    hold_s: float = D.STEP_HOLD_S
+    repeat: int = D.STEP_REPEAT
     period_s: float = 8.0
     start_s: float = 15.0
     seed: int = 1

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from silbridge.tools.tune import tune_defaults as D
 from silbridge.tools.tune.tune_flight import CaptureSpec, FlightCapture, fly_captured
 from silbridge.tools.tune.tune_freq import Frf, SweepSpectra, bandwidth_hz, margins
 
@@ -43,17 +44,15 @@ class TuneError(Exception):
 
 @dataclass(frozen=True)
 class SweepConfig:
-    """The sweep and the hover it starts from. Defaults: ArduCopter's SID_* defaults
-    for frequencies and fade-out; a shorter record and fade-in (SIL has no pilot
-    to settle and no battery to spare); magnitudes small enough that no motor
-    saturates or hits the slew limit at the top frequency."""
-    f_start_hz: float = 0.5
-    f_stop_hz: float = 40.0
-    t_fade_in_s: float = 5.0
-    t_rec_s: float = 40.0
-    t_fade_out_s: float = 2.0
-    magnitude_rate_dps: float = 15.0     # SID_MAGNITUDE for rate targets [deg/s]
-    magnitude_mixer: float = 0.05        # SID_MAGNITUDE for mixer inputs (0-1)
+    """The sweep and the hover it starts from (defaults and their reasons:
+    tune_defaults.py)."""
+    f_start_hz: float = D.SWEEP_F_START_HZ
+    f_stop_hz: float = D.SWEEP_F_STOP_HZ
+    t_fade_in_s: float = D.SWEEP_T_FADE_IN_S
+    t_rec_s: float = D.SWEEP_T_REC_S
+    t_fade_out_s: float = 2.0            # ArduCopter's SID_T_FADE_OUT
+    magnitude_rate_dps: float = D.SWEEP_MAGNITUDE_RATE_DPS
+    magnitude_mixer: float = D.SWEEP_MAGNITUDE_MIXER
     sweep_at_s: float = 15.0             # hover established by then (S1 take-off)
     seed: int = 1
     scenario: str = "S1"
