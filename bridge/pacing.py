@@ -32,6 +32,12 @@ class Pacer:
         self.start_ns = time.monotonic_ns()
         self.late_steps = 0
         self.max_late_ns = 0
+        # The worst stretch: consecutive steps each more than a period late (a host too
+        # slow, or a long stall), from its first late deadline until a step is on time.
+        self.worst_stretch_ns = 0
+        self.worst_stretch_step = 0     # the step it began at (sim time = step * dt)
+        self._stretch_from_ns: int | None = None
+        self._stretch_step = 0
 
     def restart(self) -> None:
         self.start_ns = time.monotonic_ns()
@@ -50,6 +56,21 @@ class Pacer:
         late = now - deadline
         if late > self.period_ns:
             self.late_steps += 1
+            if self._stretch_from_ns is None:
+                self._stretch_from_ns, self._stretch_step = deadline, k
+        elif self._stretch_from_ns is not None:
+            self._end_stretch(now)
         if late > self.max_late_ns:
             self.max_late_ns = late
         return late
+
+    def finish(self, now_ns: int | None = None) -> None:
+        """End the run: a stretch still open counts up to now."""
+        if self._stretch_from_ns is not None:
+            self._end_stretch(time.monotonic_ns() if now_ns is None else now_ns)
+
+    def _end_stretch(self, now_ns: int) -> None:
+        span = now_ns - self._stretch_from_ns
+        if span > self.worst_stretch_ns:
+            self.worst_stretch_ns, self.worst_stretch_step = span, self._stretch_step
+        self._stretch_from_ns = None

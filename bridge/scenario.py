@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import copy
 import math
+import re
+import sys
 import tomllib
 import zlib
 from dataclasses import dataclass, field
@@ -120,11 +122,23 @@ def load_scenario(name_or_path, seed: int | None = None, overrides: dict | None 
     """check_fc_param(name, value): raises ValueError (with a message for the user) for a
     [[fc_param]] the FC would refuse; the caller that knows the FC gives it."""
     path = _find(name_or_path)
+    data = path.read_bytes()
     try:
-        with open(path, "rb") as fh:
-            raw = tomllib.load(fh)
+        raw = tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as exc:    # TOML is UTF-8 by definition
+        line = data[:exc.start].count(b"\n") + 1
+        raise ScenarioError(f"{path.name}: byte 0x{data[exc.start]:02x} at line {line} is not "
+                            f"UTF-8 text; save the file as UTF-8") from None
     except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path.name}: not valid TOML ({exc}); fix the syntax") from None
+        # tomllib says "(at line L, column C)", or "(at end of document)": that is the last line
+        why = str(exc).replace("(at end of document)",
+                               f"(at line {max(1, len(data.splitlines()))}, end of file)")
+        raise ScenarioError(f"{path.name}: not valid TOML ({why}); fix the syntax") from None
+    except ValueError:   # tomllib lets Python's int() limit through: a number of 4301+ digits
+        long_number = re.search(r"\d{%d,}" % (sys.get_int_max_str_digits() + 1), data.decode())
+        line = data.decode()[:long_number.start()].count("\n") + 1 if long_number else 1
+        raise ScenarioError(f"{path.name}: line {line}: a number with too many digits; "
+                            f"write a smaller one") from None
     return scenario_from_dict(raw, source=str(path), seed=seed, overrides=overrides,
                               check_fc_param=check_fc_param)
 
@@ -203,6 +217,7 @@ class _Resolver:
             self.fail("seed", "missing required field; add e.g. 'seed = 1'")
         self.seed = self.value("seed", seed_val, S.TOP["seed"])
         top = self.table("", raw, S.TOP, skip={"disturbance", "setpoint", "fc_param", *S.SECTIONS})
+        self.duration_s = top["duration_s"]
         sections = {}
         for sec, schema in S.SECTIONS.items():
             tbl = raw.get(sec, {})
@@ -250,7 +265,7 @@ class _Resolver:
         kind = tbl.get("type")
         if kind is None:
             self.fail(prefix + ".type", f"missing required field; one of {', '.join(types)}")
-        if kind not in types:
+        if not isinstance(kind, str) or kind not in types:
             self.fail(prefix + ".type", f"unknown type {kind!r}; one of {', '.join(types)}")
         schema = {**common, **types[kind]}
         if kind == "tilt":
@@ -268,6 +283,13 @@ class _Resolver:
         reps = out["repeat"]
         if reps > 1 and out["period_s"] <= 0:
             self.fail(prefix + ".period_s", "must be > 0 when repeat > 1")
+        # Checked before the per-repetition draws below, which would otherwise be made (and
+        # held) for every one of a mistyped count of 10**12.
+        last_start_s = out["start_s"] + (reps - 1) * out["period_s"]
+        if reps > 1 and not last_start_s < self.duration_s:
+            self.fail(prefix + ".repeat", f"repetition {reps} would start at {last_start_s:g} s, "
+                                          f"not before the end of the run "
+                                          f"({self.duration_s:g} s); lower repeat or period_s")
         for key in ("amplitude_deg", "hold_s", "ramp_s"):
             spec = schema[key]
             if key not in tbl and spec.default is S.REQUIRED:

@@ -298,12 +298,14 @@ class _NeverStop:
 STOP_GRACE_S = 1.0
 
 
-def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print, stop=_NeverStop) -> dict:
+def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print, stop=_NeverStop,
+           notices=None) -> dict:
     """Drive an FcLoop in its own process until the bridge says STOP.
 
     Returns the FC summary (with "interrupted": the signal that stopped this process, or
     "bridge" when the bridge's run was interrupted, else None). Raises FcLost when the
     bridge dies mid-run. stop: anything with `requested` and `name` (tools/loop/stop_signals.py).
+    notices: a fc_sil.sim_notice.NoticeReader (the bridge's rate reports), polled when idle.
     """
     seg = loop.seg
     dt_ns = seg.word(ls.PHYSICS_DT_NS) or 1_000_000
@@ -331,6 +333,8 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print, stop=_NeverSt
                 # Drain what is left so the last step is answered.
                 while loop.poll():
                     pass
+                if notices is not None:     # the end figures, written before STOP
+                    notices.poll(force=True)
                 if stop_word == ls.STOP_INTERRUPTED and interrupted is None:
                     interrupted = "bridge"
                 break
@@ -340,6 +344,8 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print, stop=_NeverSt
                     pass
                 seg.set_word(ls.FC_STOP, 1)   # the bridge stops too (PeerWatch)
                 break
+            if notices is not None:
+                notices.poll()
             # Yield (not sleep) through about a physics period: a sleeping FC wakes
             # up to ~1 ms after its data, a yielding one within a microsecond or two.
             if not wait(wait_slice_s):

@@ -78,13 +78,20 @@ def load_start_params(core, param_file: str | None, overrides: dict | None = Non
     return store, problems
 
 
+def _mission_result(code: int) -> str:
+    """MAV_MISSION_INVALID_PARAM1 and the like, for an error message."""
+    from pymavlink.dialects.v20 import ardupilotmega as mav
+    entry = mav.enums["MAV_MISSION_RESULT"].get(code)
+    return entry.name if entry is not None else f"MAV_MISSION_RESULT {code}"
+
+
 def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None = None,
                           sink=None, out=None) -> Vehicle:
     from silbridge.mavlink.errors import MissionFileError
-    from silbridge.mavlink.gcs.mission_store import MissionStore, home_item
+    from silbridge.mavlink.gcs.mission_store import MissionStore, check_mission, home_item
     from silbridge.mavlink.gcs.server import GcsServer
-    from silbridge.mavlink.gcs.geo_store import GeoStore
-    from silbridge.mavlink.gcs.wpl import geo_file, load_wpl
+    from silbridge.mavlink.gcs.geo_store import GeoStore, check_list
+    from silbridge.mavlink.gcs.wpl import geo_file, item_line, load_wpl
 
     store, problems = load_start_params(core, opts.param_file, overrides,
                                         create=opts.save_params)
@@ -95,8 +102,13 @@ def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None 
         except MissionFileError as exc:
             raise VehicleSetupError(str(exc)) from None
         if items and missions.replace(items) != 0:
-            raise VehicleSetupError(f"{opts.mission_file}: the mission holds an item this "
-                                    f"vehicle cannot fly; fix the file or remove --mission")
+            result, bad = check_mission(items)
+            if bad < 0:      # every item is fine: there are too many
+                raise VehicleSetupError(f"{opts.mission_file}: {len(items)} items, more than "
+                                        f"the {missions.capacity} a mission holds; shorten it")
+            raise VehicleSetupError(f"{opts.mission_file}:{item_line(opts.mission_file, bad)}: "
+                                    f"item {bad} refused ({_mission_result(result)}); fix the "
+                                    f"file or remove --mission")
     geo = {t: GeoStore(t) for t in (1, 2)}     # MAV_MISSION_TYPE_FENCE, _RALLY
     for t, gs in geo.items():
         path = geo_file(opts.mission_file, t) if opts.mission_file else None
@@ -106,9 +118,11 @@ def start_mavlink_vehicle(core, opts: MavlinkOptions, *, overrides: dict | None 
             except MissionFileError as exc:
                 raise VehicleSetupError(str(exc)) from None
             if gs.replace(items) != 0:
-                raise VehicleSetupError(f"{path}: not a valid {gs.what.lower()} list (see "
-                                        f"docs: fence polygons need all their vertices); fix "
-                                        f"or remove the file")
+                result, bad = check_list(t, items)    # bad is -1 for too many items
+                where = f"{path}:{item_line(path, bad)}: item {bad}" if bad >= 0 else path
+                raise VehicleSetupError(f"{where}: not a valid {gs.what.lower()} list "
+                                        f"({_mission_result(result)}; see docs: fence polygons "
+                                        f"need all their vertices); fix or remove the file")
     vehicle = Vehicle(core, store, sink=sink, mission_file=opts.mission_file)
     vehicle.fence.set_items(geo[1].items())
     vehicle.rally.set_items(geo[2].items())

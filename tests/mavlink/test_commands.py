@@ -23,6 +23,11 @@ def test_ack_echoes_sender_and_unknown_is_unsupported(env):
 
 def test_command_for_another_system_is_ignored(env):
     assert env.client.command_long(mav.MAV_CMD_NAV_LAND, target=(7, 1), timeout_s=0.3) is None
+    # Not only no ACK: the vehicle never ran it, and the same command for us still runs, once.
+    assert env.vehicle.calls_named("land") == []
+    ack = env.client.command_long(mav.MAV_CMD_NAV_LAND)
+    assert ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED
+    assert len(env.vehicle.calls_named("land")) == 1
 
 
 def test_arm_refused_by_prearm_with_statustext_then_forced(env):
@@ -127,13 +132,12 @@ def test_request_message_and_home(env):
     assert ack.result == mav.MAV_RESULT_FAILED          # ArduCopter 4.6 for an unknown id
 
 
-def test_ack_within_half_a_second_even_when_vehicle_stalls(env):
+def test_a_stalled_vehicle_still_gets_an_ack_temporarily_rejected(env):
     env.vehicle.service_enabled = False          # the vehicle loop stops draining its queue
-    t0 = time.monotonic()
+    # An answer, not silence: the server withdraws the call (at 0.4 s) and says so, within
+    # command_long's wait (no timing is asserted beyond that).
     ack = env.client.command_long(mav.MAV_CMD_NAV_LAND)
-    dt = time.monotonic() - t0
-    assert ack.result == mav.MAV_RESULT_TEMPORARILY_REJECTED
-    assert dt < 5.0      # an answer, not silence (the server withdraws the call at 0.4 s)
+    assert ack is not None and ack.result == mav.MAV_RESULT_TEMPORARILY_REJECTED
     env.vehicle.service_enabled = True
     time.sleep(0.05)
     assert env.vehicle.calls_named("land") == []   # the withdrawn call never ran

@@ -229,10 +229,10 @@ def test_wpl_file_roundtrip_through_server(env, tmp_path):
     save_wpl(path, items)
     loaded = load_wpl(path)
     assert len(loaded) == len(items)
-    assert all(a.same_content(b) for a, b in zip(items, loaded))
+    assert all(a.same_content(b) for a, b in zip(items, loaded, strict=True))
     assert upload(env.client, loaded).type == mav.MAV_MISSION_ACCEPTED
     stored = env.server.missions.items()
     save_wpl(tmp_path / "back.waypoints", stored)
     again = load_wpl(tmp_path / "back.waypoints")
-    assert all(a.same_content(b) for a, b in zip(stored, again))
+    assert all(a.same_content(b) for a, b in zip(stored, again, strict=True))
     assert path.read_text().splitlines()[0] == "QGC WPL 110"

@@ -9,6 +9,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.mavlink.gcs.vehicle_api import SensorBit
 
+from mavtest_client import GcsClient
+
 M = mav
 
 
@@ -69,14 +71,28 @@ def test_request_data_stream_groups(env):
     assert c["GLOBAL_POSITION_INT"] == 0 and c["VFR_HUD"] >= 1
 
 
-def test_streams_are_per_link(env):
-    other = env.new_client(sysid=245)
-    other.send(other.mav.heartbeat_encode(6, 8, 0, 0, 0, 3))   # udpin now answers `other`
-    assert other.command_long(M.MAV_CMD_SET_MESSAGE_INTERVAL, p1=M.MAVLINK_MSG_ID_VFR_HUD,
-                              p2=50_000).result == M.MAV_RESULT_ACCEPTED
-    other.drain()
-    assert counts(other.collect(0.5))["VFR_HUD"] >= 5
-    other.close()
+def test_streams_are_per_link(make_env):
+    # Two endpoints, one ground station on each: a rate one of them asks for is that link's
+    # alone. (Two clients of one udpin endpoint would be one link: it answers the last sender.)
+    env = make_env(endpoints=["udpin:127.0.0.1:0", "udpin:127.0.0.2:0"])
+    first = env.client                                    # on 127.0.0.1
+    other = GcsClient(env.server.local_addresses()["udpin:127.0.0.2:0"], sysid=245)
+    try:
+        other.send(other.mav.heartbeat_encode(6, 8, 0, 0, 0, 3))
+        assert other.command_long(M.MAV_CMD_SET_MESSAGE_INTERVAL, p1=M.MAVLINK_MSG_ID_VFR_HUD,
+                                  p2=50_000).result == M.MAV_RESULT_ACCEPTED     # 20 Hz
+        assert first.command_long(M.MAV_CMD_SET_MESSAGE_INTERVAL, p1=M.MAVLINK_MSG_ID_ATTITUDE,
+                                  p2=50_000).result == M.MAV_RESULT_ACCEPTED     # 20 Hz
+        first.drain()
+        other.drain()
+        got_other = counts(other.collect(0.5))
+        got_first = counts(first.collect(0.2))      # includes what arrived meanwhile
+        assert got_other["VFR_HUD"] >= 5 and got_first["ATTITUDE"] >= 5
+        # Neither link received the other's rate (both messages are off by default).
+        assert got_first["VFR_HUD"] == 0, got_first
+        assert got_other["ATTITUDE"] == 0, got_other
+    finally:
+        other.close()
 
 
 def test_contents_health_home_and_pid_tuning(env):

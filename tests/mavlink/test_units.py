@@ -98,7 +98,7 @@ def test_wpl_parse_errors_and_format():
              MissionItem(1, 2, 178, param1=1, param2=5.5, param3=-1)]
     text = format_wpl(items)
     assert text.splitlines()[1].split("\t")[8:10] == ["-35.36326210", "149.16523740"]
-    assert all(a.same_content(b) for a, b in zip(items, parse_wpl(text)))
+    assert all(a.same_content(b) for a, b in zip(items, parse_wpl(text), strict=True))
     with pytest.raises(MissionFileError):
         parse_wpl("QGC WPL 100\n")
     with pytest.raises(MissionFileError):

@@ -8,14 +8,18 @@ import os
 import subprocess
 import sys
 
+import shutil
+from pathlib import Path
+
 import pytest
 
-pytestmark = pytest.mark.skipif(
+needs_binary = pytest.mark.skipif(
     not os.environ.get("SILBRIDGE_ARDUCOPTER"),
     reason="set SILBRIDGE_ARDUCOPTER to an arducopter SITL binary to compare its speeds "
            "(none on this machine; see README 'ArduCopter SITL')")
 
 
+@needs_binary
 def test_speed_tool_prints_both_speeds_and_the_ratio():
     p = subprocess.run([sys.executable, "-m", "silbridge.tools.autopilots.ardupilot_speed", "--skip", "2",
                         "--span", "3", "--flight", "0", "--json"],
@@ -31,8 +35,27 @@ def test_speed_tool_prints_both_speeds_and_the_ratio():
         assert out["json_idle"][key]["median"] > 0
 
 
+def _env_without_sitl() -> dict:
+    """This environment with no arducopter to find: the variable removed, PATH cut to the
+    interpreter's folder and the system's (as the PX4 twin in test_px4_protocol.py does)."""
+    env = dict(os.environ)
+    env.pop("SILBRIDGE_ARDUCOPTER", None)
+    env["PATH"] = f"{Path(sys.executable).parent}:/usr/bin:/bin"
+    return env
+
+
 def test_speed_tool_without_a_binary_says_how_to_get_one(tmp_path):
-    env = dict(os.environ, SILBRIDGE_ARDUCOPTER=str(tmp_path / "missing"))
+    # Runs everywhere, binary or not: the variable is removed in the subprocess only.
+    env = _env_without_sitl()
+    if shutil.which("arducopter", path=env["PATH"]):
+        pytest.skip("an arducopter binary is in /usr/bin here: no binary cannot be shown")
+    p = subprocess.run([sys.executable, "-m", "silbridge.tools.autopilots.ardupilot_speed", "--json"],
+                       capture_output=True, text=True, timeout=60, env=env)
+    assert p.returncode == 2, p.stderr
+    assert "SILBRIDGE_ARDUCOPTER" in p.stderr and "waf copter" in p.stderr
+    assert "Traceback" not in p.stderr and p.stdout == ""
+    # A variable naming a file that is not there is the same user error.
+    env["SILBRIDGE_ARDUCOPTER"] = str(tmp_path / "missing")
     p = subprocess.run([sys.executable, "-m", "silbridge.tools.autopilots.ardupilot_speed", "--json"],
                        capture_output=True, text=True, timeout=60, env=env)
     assert p.returncode == 2 and "waf copter" in p.stderr and "Traceback" not in p.stderr

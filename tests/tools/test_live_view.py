@@ -113,12 +113,8 @@ def test_fly_live_serves_every_viewable_channel(tmp_path, pitch_push_scenario):
     scenario = pitch_push_scenario(
         tmp_path, "live", "pitch step at 2 s, push north from 2.5 to 3.5 s (on the ground)",
         seed=9, duration_s=6.0, step_s=2.0)
-    # A real-time start on a loaded 2-core machine can miss the bridge's start-up rate
-    # check (the machine, not the live view, was slow for that second): retried twice.
-    for _attempt in range(3):
-        rc, output, heard = _fly_and_listen(scenario)
-        if not (rc != 0 and "start-up check" in output):
-            break
+    # A loaded machine's rate shortfall no longer stops the run (it is reported instead).
+    rc, output, heard = _fly_and_listen(scenario)
     assert rc == 0 and heard is not None, output[-3000:]
     proto, channels, got = heard
     assert proto == "foxglove.sdk.v1"

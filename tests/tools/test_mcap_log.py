@@ -9,6 +9,8 @@ import sys
 import numpy as np
 import pytest
 from mcap.reader import make_reader
+from mcap.records import Chunk, Message
+from mcap.stream_reader import StreamReader
 
 from silbridge.shm.records import RECORD_DTYPE, Kind, empty
 from silbridge.tools.logs.log_synth import SYNTH_STATUS_DTYPE, synthetic_run, write_run
@@ -175,6 +177,14 @@ def test_compressed_logs_round_trip(tmp_path, run, compression):
     log = read_log(path)
     assert not log.truncated
     _same_rows(log.channels["/fc/status"], run.channels["/fc/status"])
+    # The rows came back through compressed chunks: every data message sits in a chunk of
+    # the asked compression, and the chunks are smaller than what they hold.
+    with open(path, "rb") as f:
+        records = list(StreamReader(f, skip_magic=False, emit_chunks=True).records)
+    chunks = [r for r in records if isinstance(r, Chunk)]
+    assert chunks and all(c.compression == compression for c in chunks)
+    assert sum(len(c.data) for c in chunks) < sum(c.uncompressed_size for c in chunks)
+    assert not any(isinstance(r, Message) for r in records)     # none outside a chunk
 
 
 def test_a_channel_keeps_its_dtype(tmp_path):

@@ -22,7 +22,9 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.bridge.px4_physics import Px4Physics
+from silbridge.bridge import px4_server
 from silbridge.bridge.px4_server import Px4HilServer
+from silbridge.bridge.runner_errors import StartupCheckFailed
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 from silbridge.mavlink.hil import px4_hil
@@ -124,9 +126,14 @@ def test_bridge_sensors_use_px4_field_groups_and_interval(recording):
 class _FakePx4(threading.Thread):
     """PX4's side of the recording replayed: each recorded PX4 message goes out once the bridge
     has sent as many HIL_SENSOR as PX4 had received before it; HIL_ACTUATOR_CONTROLS carry
-    the newest sensor time received, as PX4's clock would."""
+    the newest sensor time received, as PX4's clock would.
 
-    def __init__(self, port: int, events):
+    extra_s: after the recording (0.4 s of sim time), keep answering each HIL_SENSOR with the
+    last recorded reply for this much more sim time, so the bridge reaches its start-up check
+    (STARTUP_CHECK_S after the first reply); lockstep=False clears the lockstep flag in those
+    replies, as a PX4 built without lockstep sends them."""
+
+    def __init__(self, port: int, events, extra_s: float = 0.0, lockstep: bool = True):
         super().__init__(daemon=True)
         self.port = port
         self.script = []
@@ -136,6 +143,17 @@ class _FakePx4(threading.Thread):
                 seen += 1
             elif d == "rx":
                 self.script.append((seen, m))
+        answered, last = next((n, m) for n, m in reversed(self.script)
+                              if m.get_type() == "HIL_ACTUATOR_CONTROLS")
+        step_us = 4000           # the recording's HIL_SENSOR spacing (checked by the test below)
+        for k in range(1, int(extra_s * 1e6 / step_us) + 1):
+            m = mav.MAVLink_hil_actuator_controls_message(
+                0, list(last.controls), last.mode,
+                last.flags if lockstep else last.flags & ~px4_hil.FLAG_LOCKSTEP)
+            self.script.append((answered + k, m))
+        # The recording may end with HIL_SENSORs PX4 had not answered yet: the added replies
+        # answer them, in order (a stable sort keeps the recorded order otherwise).
+        self.script.sort(key=lambda e: e[0])
         self.codec = mav.MAVLink(None, srcSystem=1, srcComponent=1)
         self.sensor_times: list = []
         self.error = None
@@ -148,7 +166,11 @@ class _FakePx4(threading.Thread):
             rx.robust_parsing = True
             for need, m in self.script:
                 while len(self.sensor_times) < need:
-                    for got in rx.parse_buffer(s.recv(65536)) or []:
+                    data = s.recv(65536)
+                    if not data:         # the bridge closed the link before the script's end
+                        s.close()
+                        return
+                    for got in rx.parse_buffer(data) or []:
                         if got.get_type() == "HIL_SENSOR":
                             self.sensor_times.append(got.time_usec)
                 if m.get_type() == "HIL_ACTUATOR_CONTROLS":
@@ -157,6 +179,8 @@ class _FakePx4(threading.Thread):
             while s.recv(65536):      # until the bridge closes the link
                 pass
             s.close()
+        except (ConnectionResetError, BrokenPipeError):
+            pass      # the bridge closed the link while replies were still going out: its end
         except Exception as e:  # noqa: BLE001 - reported by the test
             self.error = repr(e)
 
@@ -185,7 +209,42 @@ def test_bridge_freewheels_then_steps_once_per_replayed_px4_reply(recording):
     assert st["px4_steps"] == st["freewheel_steps"] + st["answered"]
     assert st["state_interval_us"] == 5000
     assert fake.sensor_times == [4000 * (k + 1) for k in range(len(fake.sensor_times))]
-    assert res.startup_check == {} or res.startup_check["passed"]
+    # 0.4 s of sim time: the start-up check (2 s after the first reply) has not run yet; the
+    # two tests below replay long enough to reach it.
+    assert res.startup_check == {}
+
+
+def _serve_until_checked(events, lockstep: bool):
+    phys = Px4Physics(lambda: Simulator(load_scenario("S1", seed=1)), make_codec(1, 51))
+    fake = None
+    try:
+        with Px4HilServer(phys, ("127.0.0.1", 0)) as server:
+            fake = _FakePx4(server.address[1], events, extra_s=px4_server.STARTUP_CHECK_S + 0.5,
+                            lockstep=lockstep)
+            fake.start()
+            return server.serve(30.0, connect_timeout_s=10.0, stall_s=0.5, idle_timeout_s=10.0,
+                                stop=lambda: bool(server.check))
+    finally:     # the server has closed the link: the fake's read loop ends
+        if fake is not None:
+            fake.join(10)
+            assert fake.error is None
+
+
+def test_px4_start_up_check_passes_on_a_lockstep_replay_long_enough_to_reach_it(recording):
+    _, events = recording
+    res = _serve_until_checked(events, lockstep=True)
+    check = res.startup_check
+    assert check["passed"] is True and "problems" not in check
+    assert check["after_sim_s"] >= px4_server.STARTUP_CHECK_S
+    assert check["px4_lockstep_flag"] is True
+    assert check["unanswered"] == 0 and check["bad_crc"] == 0 and check["malformed"] == 0
+    assert check["replies"] == res.stats["replies"] > 0
+
+
+def test_px4_start_up_check_fails_when_px4_drops_the_lockstep_flag(recording):
+    _, events = recording
+    with pytest.raises(StartupCheckFailed, match="lack the lockstep flag"):
+        _serve_until_checked(events, lockstep=False)
 
 
 def test_controls_map_px4_outputs_to_our_motors():

@@ -137,11 +137,17 @@ def test_px4_takes_off_and_holds_in_offboard_in_real_time(tmp_path):
     assert 0.5 < s["sim_s_total"] / s["wall_total_s"] < 1.3
     log = read_log(str(tmp_path / "px4.mcap"))
     assert check_log(log) == []
-    # Looser than lockstep: in a few real-time runs on a heavily loaded runner (not
-    # reproduced with 2-5 busy loops, 0 of 22), PX4's height estimate settled about 1.1 m
-    # below the truth during the climb and it held that steadily; the lockstep test pins
-    # the 0.7 m figure. Steadiness is what real time must show.
-    _offboard_hold(s, log, 1.5, 2.5)
+    # Under load, some real-time boots of PX4 start EKF2 with a vertical velocity at rest and
+    # keep the height it integrates as their baro offset (issue 29); the pre-flight check
+    # (tools/autopilots/px4_rest_height.py) takes off only once PX4's height at rest has
+    # settled, restarting PX4 when it does not, so the hold is held to lockstep's figures.
+    from silbridge.tools.autopilots.px4_flight import HEIGHT_RESTARTS
+    from silbridge.tools.autopilots.px4_rest_height import REST_Z_M
+
+    rest = s["rest_height"]
+    assert rest["settled_s"] is not None and abs(rest["z_m"]) <= REST_Z_M
+    assert 0 <= s["px4_restarts"] <= HEIGHT_RESTARTS
+    _offboard_hold(s, log, 0.7, 1.5)
     held = _hold(log, s["offboard_from_s"] + SETTLE_S)
     assert held.std() < 0.3, f"altitude not held steadily: std {held.std():.2f} m"
 

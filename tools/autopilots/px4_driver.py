@@ -7,7 +7,9 @@ sends a heartbeat (1 Hz wall), asks for ATTITUDE_TARGET and LOCAL_POSITION_NED a
 first request at boot, and without LOCAL_POSITION_NED the companion's altitude loop has no
 altitude, the forwarder starts late on its 10 s timer and holds hover thrust open loop),
 then every RETRY_SIM_S of sim time until the take-off is accepted: arm (PX4
-arms once its pre-flight checks pass, some 10-30 s of sim time after boot), and once armed
+arms once its pre-flight checks pass, some 10-30 s of sim time after boot; we ask only once
+its height at rest has settled, tools/autopilots/px4_rest_height.py, and report
+`height_unsettled` when it does not, so the flight can restart PX4), and once armed
 MAV_CMD_NAV_TAKEOFF (altitude: MIS_TAKEOFF_ALT, set to the scenario's). After the take-off,
 `want_offboard()` (from the setpoint forwarder, once it streams) makes it switch PX4 to
 OFFBOARD (MAV_CMD_DO_SET_MODE, custom main mode 6) until the heartbeat says so: PX4 accepts
@@ -30,6 +32,7 @@ import time
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.tools.autopilots.autopilot_driver import AutopilotDriver
+from silbridge.tools.autopilots.px4_rest_height import RestHeightCheck
 from silbridge.tools.autopilots.sitl_px4 import OFFBOARD_LOCAL_BASE, OFFBOARD_REMOTE_BASE, Px4Error
 
 STREAM_HZ = 50.0
@@ -63,6 +66,8 @@ class Px4Driver(AutopilotDriver):
         self.heard: set[int] = set()                  # message ids received from PX4
         self.alt_m: float | None = None        # LOCAL_POSITION_NED -z
         self.climb_m_s: float | None = None    # LOCAL_POSITION_NED -vz
+        self.rest_height = RestHeightCheck()
+        self.height_unsettled: str | None = None   # why, when the check failed (run stops)
 
     # pymavlink "file" interface (always under _tx_lock)
     def write(self, buf: bytes) -> None:
@@ -112,10 +117,14 @@ class Px4Driver(AutopilotDriver):
                 for msg_id in missing:
                     self._command(mav.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / STREAM_HZ)
             if not self.took_off:
+                if not self.armed and self.rest_height.failed(t):
+                    self.height_unsettled = self.rest_height.why()
+                    return
                 if next_try is None or t >= next_try:
                     next_try = t + RETRY_SIM_S
                     if not self.armed:
-                        self._command(mav.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+                        if self.rest_height.settled:
+                            self._command(mav.MAV_CMD_COMPONENT_ARM_DISARM, 1)
                     else:
                         self.on_takeoff_sent()
                         self._command(mav.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, math.nan, math.nan,
@@ -146,5 +155,7 @@ class Px4Driver(AutopilotDriver):
             self._note_offboard()
         elif kind == "LOCAL_POSITION_NED":
             self.alt_m, self.climb_m_s = -m.z, -m.vz
+            if not self.armed:
+                self.rest_height.feed(self.sim_time_s(), m.z, m.vz)
         else:
             self._report(m, kind)

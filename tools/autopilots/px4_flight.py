@@ -10,6 +10,10 @@ arm, take off, OFFBOARD), the scenario's setpoints as attitude targets
 (tools/autopilots/px4_setpoints.py), logged from the bridge side exactly as ArduCopter runs are
 (tools/autopilots/ardupilot_log.py: /fc/status att_target_rad = the command sent, ap_target_rad = PX4's
 own ATTITUDE_TARGET), so tools/benchmark/metrics.py computes the same Table 1 metrics.
+A PX4 whose height at rest never settles (tools/autopilots/px4_rest_height.py) is never
+flown: it is stopped and a fresh one booted, as a user power-cycles a vehicle whose ground
+station shows it off the ground, at most HEIGHT_RESTARTS times (`px4_restarts` in the
+summary).
 """
 
 from __future__ import annotations
@@ -32,11 +36,22 @@ from silbridge.tools.autopilots.autopilot_run import (
 from silbridge.tools.logs.fc_target import TargetFeed
 from silbridge.tools.autopilots.px4_driver import Px4Driver
 from silbridge.tools.autopilots.px4_setpoints import Px4SetpointForwarder
-from silbridge.tools.autopilots.sitl_px4 import PX4, SIM_TCP_BASE, px4_params, start_px4
+from silbridge.tools.autopilots.sitl_px4 import (
+    PX4,
+    SIM_TCP_BASE,
+    Px4Error,
+    px4_params,
+    start_px4,
+)
 
 _NS = 1_000_000_000
 BOOT_BUDGET_S = 90.0     # sim seconds PX4 may take from boot to an accepted take-off
 SIM_SYSID, SIM_COMPID = 1, 51
+HEIGHT_RESTARTS = 3      # fresh PX4 boots after one whose height at rest did not settle
+
+
+class HeightUnsettled(Px4Error):
+    """PX4's height at rest did not settle before take-off (the run is restarted)."""
 
 
 def serve_px4(scenario: str, *, seed=None, imu_hz=None, duration_s=None, realtime=False,
@@ -56,12 +71,26 @@ def serve_px4(scenario: str, *, seed=None, imu_hz=None, duration_s=None, realtim
                        link={"hil_link": res.stats, "startup_check": res.startup_check})
 
 
-def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: str, etc: str,
-            imu_hz=None, params: dict | None = None, realtime: bool = False,
-            boot_budget_s: float = BOOT_BUDGET_S, keep_dir: bool = False,
-            spin_us: float = 0.0) -> dict:
-    """One PX4 run: boot, arm, take off, OFFBOARD for duration_s; log from take-off.
-    spin_us: the lockstep link's spin budget (bridge/link_spin.py; campaigns choose it)."""
+def fly_px4(**kw) -> dict:
+    """One PX4 run: boot, arm, take off, OFFBOARD for duration_s; log from take-off (the
+    arguments of `_fly_once`). A boot whose height at rest does not settle is restarted."""
+    for restarts in range(HEIGHT_RESTARTS + 1):
+        try:
+            summary = _fly_once(**kw)
+        except HeightUnsettled as e:
+            why = str(e)
+            continue
+        summary["px4_restarts"] = restarts
+        return summary
+    raise HeightUnsettled(f"{why}, in {HEIGHT_RESTARTS + 1} boots of PX4 in a row: is the "
+                          "machine overloaded? (lockstep, the default, has not shown it)")
+
+
+def _fly_once(*, scenario: str, seed, duration_s: float, log_path: str, binary: str, etc: str,
+              imu_hz=None, params: dict | None = None, realtime: bool = False,
+              boot_budget_s: float = BOOT_BUDGET_S, keep_dir: bool = False,
+              spin_us: float = 0.0) -> dict:
+    """spin_us: the lockstep link's spin budget (bridge/link_spin.py; campaigns choose it)."""
     sc, make_sim = scenario_factory(scenario, seed, imu_hz)
     target = AttitudeTarget()
     feed = TargetFeed()
@@ -86,8 +115,11 @@ def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: st
         run.launch(start_px4, binary, etc, run.instance, run.workdir, params=p4)
         driver.start()
         res = server.serve(boot_budget_s + duration_s, realtime=realtime,
-                           stop=run.stop_when(lambda: sink.done, driver),
+                           stop=run.stop_when(
+                               lambda: sink.done or driver.height_unsettled is not None, driver),
                            connect_timeout_s=30.0, spin_us=spin_us)
+        if driver.height_unsettled is not None:
+            raise HeightUnsettled(driver.height_unsettled)
         run.raise_if_failed(sink, driver, boot_budget_s,
                             mode=f"{driver.main_mode}/{driver.sub_mode}")
     finally:
@@ -98,7 +130,7 @@ def fly_px4(*, scenario: str, seed, duration_s: float, log_path: str, binary: st
     return flight_summary("px4", sc, res, run, sink, log_path,
                           link={"hil_link": res.stats, "startup_check": res.startup_check},
                           imu_hz=phys.sim.imu_hz, **_offboard(driver, sink),
-                          **forwarder.summary())
+                          rest_height=driver.rest_height.summary(), **forwarder.summary())
 
 
 def _offboard(driver, sink) -> dict:

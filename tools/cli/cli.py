@@ -26,6 +26,7 @@ COMMANDS = {
     "fc": "cmd_fc",
     "fly": "cmd_fly",
     "sitl": "cmd_sitl",
+    "soak": "cmd_soak",
     "bench": "cmd_bench",
     "ablate": "cmd_ablate",
     "transport": "cmd_transport",

@@ -80,8 +80,12 @@ def run(args) -> int:
                     f"(or a PX4 SITL / HIL autopilot)")
             if not math.isfinite(cfg.duration_s):
                 out("bridge: real time until stopped (Ctrl-C); --duration S ends it sooner")
+            from silbridge.fc_sil.sim_notice import NoticeWriter    # rate reports -> FC
+            notices = None if cfg.lockstep else NoticeWriter(opts.instance)
             with STOP.polling(), STOP.emergency(segment_unlinker(seg)):
-                res = run_bridge(sim, seg, cfg, out=out, stop=STOP)
+                res = run_bridge(sim, seg, cfg, out=out, stop=STOP, notify=notices)
+            if notices is not None:     # the FC has read the end figures (it said DONE)
+                notices.remove()
     finally:
         if untaken(handover) and res is not None:
             print("bridge: no `silbridge fc` took --param/--feature-off/--params (a foreign "

@@ -91,9 +91,11 @@ def run(args) -> int:
         sink = _open_log(args, loop)
         summary = None
         ended = {}
+        from silbridge.fc_sil.sim_notice import NoticeReader    # the bridge's rate reports
+        notices = NoticeReader(args.instance, loop) if realtime else None
         try:
             with STOP.polling():
-                summary = run_fc(loop, out=out, stop=STOP)
+                summary = run_fc(loop, out=out, stop=STOP, notices=notices)
         except BaseException as exc:
             # The log says why it ends early (analyze then checks it up to there).
             ended = {"aborted": f"{type(exc).__name__}: {exc}"}
@@ -102,7 +104,8 @@ def run(args) -> int:
             close_fc_loop(loop)
             if sink is not None:
                 why = (summary or {}).get("interrupted") or STOP.name
-                sink.close(**({"interrupted": why} if why else ended))
+                rates = {"rates": notices.final} if notices and notices.final else {}
+                sink.close(**({"interrupted": why} if why else ended), **rates)
         if mav_opts is not None:
             summary["mavlink"] = loop.supervisor.summary()
     if args.json:

@@ -23,6 +23,7 @@ from silbridge.tools.cli.flight_args import (
     add_mavlink_arguments,
     add_processes_argument,
     add_scenario_argument,
+    add_strict_rates_argument,
     check_param_file,
     flight_duration,
     parse_params,
@@ -45,6 +46,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"instance number: the ground-station port {QGC_PORT} moves by "
                         f"{PORT_STRIDE[QGC_PORT]} N (sim_vehicle.py -I N), the MAVSDK port "
                         f"{MAVSDK_PORT} by N (PX4 -i N) (default %(default)s)")
+    add_strict_rates_argument(p)
     add_processes_argument(p)
     add_fc_arguments(p)
     add_mavlink_arguments(p, switch=False)
@@ -77,6 +79,7 @@ def options_from_args(args):
     return FlightOptions(
         scenario=args.scenario, duration_s=flight_duration(args.duration, True),
         lockstep=False, speed=args.speed, processes=args.processes,
+        strict_rates=args.strict_rates,
         params=parse_params(args.param), features_off=tuple(args.feature_off),
         mavlink=True, gcs_urls=tuple(urls), no_default_gcs=True,
         param_file=args.param_file, save_params=args.save_params,

@@ -183,6 +183,24 @@ def _transport_dir(args, bench_out: Path) -> Path | None:
     return default if (default / "transport.json").exists() else None
 
 
+def portable_command(argv: list[str]) -> str:
+    """The command line as a reader elsewhere would type it: this machine's paths give way
+    to the environment variable or the folder's own name (the page goes into the docs)."""
+    out, it = [], iter(argv)
+    for arg in it:
+        flag, eq, value = arg.partition("=")
+        if flag in ("--arducopter", "--bench-out", "--transport", "--out"):
+            value = value if eq else next(it, "")
+            if flag == "--arducopter":
+                value = "$SILBRIDGE_ARDUCOPTER"
+            elif flag != "--out":
+                value = Path(value).name
+            out.append(f"{flag} {value}" if flag == "--arducopter" else shlex.join([flag, value]))
+            continue
+        out.append(shlex.quote(arg))
+    return " ".join(out)
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     args = _parser().parse_args(argv)
@@ -203,7 +221,7 @@ def main(argv: list[str] | None = None) -> int:
         text = render(machine, table, table_md, transport, jsbsim, arducopter,
                       why_not="" if binary else NO_ARDUCOPTER,
                       written=written_at(bench_out / "table1.json"),
-                      command=f"{PROG} {shlex.join(argv)}", ran_campaign=args.run)
+                      command=f"{PROG} {portable_command(argv)}", ran_campaign=args.run)
     except Exception as exc:  # noqa: BLE001 - only user-facing errors are shortened
         if getattr(exc, "user_facing", False):
             print(f"results_page: error: {exc}", file=sys.stderr)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
 from silbridge.bridge.simulator import Simulator
+from silbridge.fc_sil.sim_notice import NoticeWriter
 
 from silbridge.tools.loop.fc_param_events import load_flight_scenario, param_at_args, param_events
 from silbridge.tools.loop.stop_signals import STOP
@@ -42,6 +43,7 @@ class FlightOptions:
     lockstep: bool = True
     speed: float = 1.0
     busy_wait: bool = False             # real time: spin between steps, never sleep
+    strict_rates: bool = False          # real time: refuse a rate shortfall (--strict-rates)
     processes: int = 2
     imu_hz: float | None = None
     seed: int | None = None
@@ -75,7 +77,7 @@ def make_simulator(opts: FlightOptions):
 def bridge_config(opts: FlightOptions, sc) -> BridgeRunConfig:
     duration = opts.duration_s if opts.duration_s is not None else sc.duration_s
     return BridgeRunConfig(duration_s=duration, lockstep=opts.lockstep, speed=opts.speed,
-                           busy_wait=opts.busy_wait,
+                           busy_wait=opts.busy_wait, strict_rates=opts.strict_rates,
                            settle_s=min(10.0, duration / 2))
 
 
@@ -203,7 +205,7 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
                 with STOP.polling(), STOP.emergency(segment_unlinker(seg)):
                     res = run_bridge(sim, seg, cfg, sink=sink, out=_tee(out, sink, sim),
                                      fc_poll=in_process_poll(fc, fc_seg, seg, sim, opts.lockstep),
-                                     stop=STOP)
+                                     stop=STOP, notify=_in_process_notify(fc))
             except BaseException as exc:
                 ended = {"aborted": f"{type(exc).__name__}: {exc}"}
                 raise
@@ -225,10 +227,23 @@ def segment_unlinker(seg):
 
 
 def _end_fields(res) -> dict:
-    """What the log's closing summary says about how the run ended."""
+    """What the log's closing summary says about how the run ended (and, in real time, the
+    achieved rates: bridge/runner_main.rates_summary)."""
     if res is None:
         return {"interrupted": STOP.name} if STOP.requested else {}
-    return {"interrupted": res.interrupted} if res.interrupted else {}
+    rates = {"rates": res.rates} if res.rates else {}
+    return {**({"interrupted": res.interrupted} if res.interrupted else {}), **rates}
+
+
+def _in_process_notify(fc):
+    """run_bridge's notify with the FC in this process: the STATUSTEXT straight to its
+    vehicle (the bridge logs the figures itself, and the end ones go in the log's end)."""
+    from silbridge.fc_sil.sim_notice import deliver
+
+    def notify(text, fields):
+        if text is not None:
+            deliver(fc, text, fields, log=False)
+    return notify
 
 
 def _tee(out, sink, sim):
@@ -273,16 +288,21 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
                 cmd += ["--viz-hz", str(opts.viz_hz)]
             if opts.live is not None:
                 cmd += ["--live", opts.live]
+        # Real time: the rate reports reach the FC's vehicle (STATUSTEXT) and log through
+        # a file (fc_sil/sim_notice.py), written before the FC can start.
+        notices = None if opts.lockstep else NoticeWriter(name)
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
         try:
             with STOP.polling(), STOP.emergency(segment_unlinker(seg)), \
                     STOP.emergency(proc.terminate):
                 res = run_bridge(sim, seg, cfg, peer_check=lambda: proc.poll() is None,
-                                 sink=sink, out=out, stop=STOP)
+                                 sink=sink, out=out, stop=STOP, notify=notices)
                 # The FC finishes and indexes the log before it prints its summary.
                 stdout, _ = proc.communicate(timeout=30)
         finally:
             stop_child(proc)
+            if notices is not None:
+                notices.remove()
     fc_summary = last_json_line(stdout)
     summary = summarise(opts, sc, sim, res, fc_summary)
     if meta_path:
@@ -340,6 +360,9 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         # The sim-time span those two RMS cover: after the settle time to the end of the run
         # (not the paper's analysis window that `silbridge analyze` scores).
         "rms_window_s": [bridge_config(opts, sc).settle_s, res.sim_s],
+        # A ground station flies the MAVLink vehicle: the scenario's setpoints are not its
+        # command, so errors against them mean nothing and are not printed.
+        "gcs_flown": bool(opts.mavlink),
         "trace_hash": res.trace_hash,
         "crashed": res.crashed,
         "scenario": sc.name,
@@ -349,6 +372,9 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         "processes": opts.processes,
         "checks": [{"name": c.name, "ok": c.ok, "detail": c.detail} for c in res.checks],
         "late_steps": res.late_steps,
+        # Achieved rates, late steps, the worst late stretch and whether the host kept up
+        # (bridge/runner_main.rates_summary); real-time benchmarks leave "degraded" runs out.
+        "rates": res.rates,
         # The signal that ended the run early ("SIGINT"/"SIGTERM"), else None.
         "interrupted": res.interrupted,
         **({"mavlink": fc_summary["mavlink"]} if "mavlink" in fc_summary else {}),
@@ -370,9 +396,22 @@ def print_summary(s: dict, out=print) -> None:
     out(f"sensor->FC latency p50 {f(lat['p50'])} us  p99 {f(lat['p99'])} us;  "
         f"loop jitter p50 {f(jit['p50'])} us  p99 {f(jit['p99'])} us")
     a, b = s["rms_window_s"]
-    out(f"error RMS over {a:g}-{round(b, 3):g} s (whole run after settling): attitude "
-        f"{f(s['attitude_rms_deg'], '{:.3f}')} deg  altitude {f(s['altitude_rms_m'], '{:.3f}')} m"
-        f"  crashed {s['crashed']}")
+    if s.get("gcs_flown"):
+        out(f"error RMS n/a: a ground station flew the vehicle (no scenario command to score)"
+            f"  crashed {s['crashed']}")
+    elif b <= a:
+        out(f"error RMS n/a: the run ended at {b:.2f} s, before the {a:g} s settling time"
+            f"  crashed {s['crashed']}")
+    else:
+        out(f"error RMS over {a:g}-{round(b, 3):g} s (whole run after settling): attitude "
+            f"{f(s['attitude_rms_deg'], '{:.3f}')} deg  altitude "
+            f"{f(s['altitude_rms_m'], '{:.3f}')} m  crashed {s['crashed']}")
     out(f"trace hash {s['trace_hash']}")
+    rt = s.get("rates") or {}
+    if rt.get("degraded"):
+        out(f"DEGRADED real time (slow host): IMU {rt['imu_hz']:.1f} Hz (want "
+            f"{rt['want_imu_hz']:g}), PWM {rt['pwm_hz']:.1f} Hz (want {rt['want_pwm_hz']:g}), "
+            f"{rt['late_steps']} late steps, worst stretch {rt['worst_stretch_s']:.2f} s from "
+            f"t={rt['worst_stretch_at_s']:.2f} s")
     if s.get("interrupted"):
         out(f"INTERRUPTED by {s['interrupted']} at {s['sim_s']:.2f} s of sim time: a partial run")

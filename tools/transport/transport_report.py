@@ -35,8 +35,9 @@ def markdown(report: dict) -> str:
         cells = [_f(ts[n]["achieved_hz"].get(key)) if ts[n]["achieved_hz"] else "n/a"
                  for n in names]
         lines.append(f"| {label} | {rpc:,} | {shm:,} | " + " | ".join(cells) + " |")
+    # A series a busy host ended has no transport ceiling: its last passing step is a floor.
     lines.append("| highest passing IMU step | | | "
-                 + " | ".join(_f(ts[n]["max_imu_hz"]) for n in names) + " |")
+                 + " | ".join(_f(ts[n]["max_imu_hz"]) + _ended(ts[n]) for n in names) + " |")
     for q in ("p50", "p95", "p99"):
         lines.append(f"| sensor->FC latency {q} (us) | | | "
                      + " | ".join(_f(ts[n]["latency_us"][q], "{:,.1f}") for n in names) + " |")
@@ -63,8 +64,21 @@ def markdown(report: dict) -> str:
                 f"{_f(a.get('pwm'), '{:.1f}')} | {_f(lat['p50'], '{:.0f}')} / "
                 f"{_f(lat['p95'], '{:.0f}')} / {_f(lat['p99'], '{:.0f}')} | "
                 f"{s['drop_ratio']:.4%} | {s['overwrite_ratio']:.4%} | {s['late_steps']} | "
-                f"{'ok' if s['ok'] else 'FAILED'} |")
+                f"{_result(s)} |")
+    if any(t.get("degraded_steps") for t in ts.values()):
+        lines += ["", "degraded: the step missed while other processes used the CPU (a busy "
+                  "host, not the transport); a series it ended reads \"at least\" (busy host)."]
     return "\n".join(lines) + "\n"
+
+
+def _ended(t: dict) -> str:
+    return " (at least; busy host)" if t.get("ended_by") == "busy host" else ""
+
+
+def _result(s: dict) -> str:
+    if s["ok"]:
+        return "ok"
+    return "degraded" if s.get("degraded") else "FAILED"
 
 
 def preload() -> None:
