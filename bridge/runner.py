@@ -14,6 +14,7 @@ as an ESC does.
 from __future__ import annotations
 
 import hashlib
+import math
 import time
 from dataclasses import dataclass
 
@@ -62,8 +63,11 @@ class BridgeLoop:
         self._col_sim = view["sim_ns"]
         self._col_wall = view["wall_ns"]
         self.settle_ns = int(settle_s * _NS)
-        self._att_err_sq = []
-        self._alt_err_sq = []
+        # Running sums, not lists: a real-time session runs for hours and the lists grew
+        # by 100 samples a second (the soak benchmark's memory check found it).
+        self._n_err = 0
+        self._att_err_sq = 0.0
+        self._alt_err_sq = 0.0
         # Bound methods looked up once: `seg.sensors.push_batch` is three lookups a step.
         self._step = sim.step
         self._push = segment.sensors.push_batch
@@ -136,18 +140,19 @@ class BridgeLoop:
         cmd = self.sim.command
         er = roll - cmd["roll_rad"]
         ep = pitch - cmd["pitch_rad"]
-        self._att_err_sq.append(er * er + ep * ep)
-        self._alt_err_sq.append((alt - cmd["alt_m"]) ** 2)
+        self._n_err += 1
+        self._att_err_sq += er * er + ep * ep
+        self._alt_err_sq += (alt - cmd["alt_m"]) ** 2
 
     def attitude_rms_deg(self) -> float | None:
-        if not self._att_err_sq:
+        if not self._n_err:
             return None
-        return float(np.degrees(np.sqrt(np.mean(self._att_err_sq))))
+        return math.degrees(math.sqrt(self._att_err_sq / self._n_err))
 
     def altitude_rms_m(self) -> float | None:
-        if not self._alt_err_sq:
+        if not self._n_err:
             return None
-        return float(np.sqrt(np.mean(self._alt_err_sq)))
+        return math.sqrt(self._alt_err_sq / self._n_err)
 
     def trace_hash(self) -> str:
         return self._hash.hexdigest() if self._trace else ""

@@ -111,7 +111,7 @@ def test_others_cpu_sees_a_busy_process_that_is_not_ours():
 
 def test_a_runner_whose_fc_child_died_exits_with_the_reason(capfd):
     cmd = [sys.executable, "-m", "silbridge.tools.transport.transport_child", "runner",
-           "--steps", "1000,2000", "--duration", str(STEP_S)]
+           "--steps", "1000,2000", "--seconds-per-rate", str(STEP_S)]
     with JsonChild(cmd, "the test runner") as runner:
         hello = runner.read_msg(60.0, "starting")
         assert hello["ready"] and hello["fc_pid"] != hello["pid"]

@@ -33,11 +33,20 @@ def run(args) -> int:
     check_link_addr(opts.transport, args.link_addr)
     if opts.lockstep and args.mavlink is None:
         print(f"silbridge fly: {NO_MAVLINK_HINT}", file=sys.stderr)
-    # Progress lines go to stderr under --json so stdout stays one JSON object.
-    out = (lambda s: print(s, file=sys.stderr)) if args.json else print
+    return fly_and_report(opts, json_out=args.json)
+
+
+def progress_printer(json_out: bool):
+    """Progress lines go to stderr under --json so stdout stays one JSON object."""
+    return (lambda s: print(s, file=sys.stderr)) if json_out else print
+
+
+def fly_and_report(opts, *, json_out: bool) -> int:
+    """One flight, its summary printed (or one JSON object), the exit status: 1 crashed,
+    the signal's 130/143 when stopped (shared by `fly` and `sitl`)."""
     fly = fly_one_process if opts.processes == 1 else fly_two_processes
-    summary = fly(opts, out=out)
-    if args.json:
+    summary = fly(opts, out=progress_printer(json_out))
+    if json_out:
         print(json.dumps(summary))
     else:
         print_summary(summary)

@@ -12,8 +12,6 @@ lockstep benchmark flight.
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 
 from silbridge.tools.cli.flight_args import (
     OptionError,
@@ -87,20 +85,12 @@ def options_from_args(args):
 
 
 def run(args) -> int:
-    from silbridge.tools.loop.flight import fly_one_process, fly_two_processes, print_summary
-    from silbridge.tools.loop.stop_signals import STOP
+    from silbridge.tools.cli.cmd_fly import fly_and_report, progress_printer
 
     opts = options_from_args(args)
-    out = (lambda s: print(s, file=sys.stderr)) if args.json else print
     until = "until stopped (Ctrl-C)" if opts.duration_s == float("inf") else \
         f"for {opts.duration_s:g} s of sim time"
-    out(f"sitl: MAVLink vehicle on {', '.join(opts.gcs_urls)}; real time x{opts.speed:g} "
-        f"{until}")
-    fly = fly_one_process if opts.processes == 1 else fly_two_processes
-    summary = fly(opts, out=out)
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print_summary(summary)
+    progress_printer(args.json)(f"sitl: MAVLink vehicle on {', '.join(opts.gcs_urls)}; "
+                                f"real time x{opts.speed:g} {until}")
     # Ctrl-C is how a sitl session ends: the shell's 130, as sim_vehicle.py's.
-    return STOP.exit_code(1 if summary["crashed"] else 0)
+    return fly_and_report(opts, json_out=args.json)
