@@ -12,7 +12,7 @@ same way for reference. Bounded: at most reps x steps steps per rate.
 `--paced` also times single steps the way real time runs them, one per 1 ms of wall
 clock (the bridge's Pacer: sleep, then spin), against back-to-back steps: on a shared VM
 a step that waited a millisecond runs with cold caches and takes several times longer,
-which is where real-time loop jitter comes from (README, "What is measured").
+which is where real-time loop jitter comes from.
 
 `--stalls S` measures the machine itself: a loop that only reads the monotonic clock for
 S seconds and records every gap over 20 us (the process was not running: host or kernel

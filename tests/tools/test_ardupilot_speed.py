@@ -16,7 +16,7 @@ import pytest
 needs_binary = pytest.mark.skipif(
     not os.environ.get("SILBRIDGE_ARDUCOPTER"),
     reason="set SILBRIDGE_ARDUCOPTER to an arducopter SITL binary to compare its speeds "
-           "(none on this machine; see README 'ArduCopter SITL')")
+           "(none on this machine; see docs/tutorials/arducopter-and-px4.md)")
 
 
 @needs_binary

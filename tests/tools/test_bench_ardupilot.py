@@ -346,7 +346,7 @@ def test_mavlink_driver_sets_guided_arms_takes_off_and_reads_the_target():
 
 @pytest.mark.skipif(not os.environ.get("SILBRIDGE_ARDUCOPTER"),
                     reason="set SILBRIDGE_ARDUCOPTER to an arducopter SITL binary to fly it "
-                           "end to end (none on this machine; see README 'ArduCopter SITL')")
+                           "end to end (none on this machine; see docs/tutorials/arducopter-and-px4.md)")
 def test_arducopter_arms_takes_off_and_hovers_30_s(tmp_path):
     from silbridge.tools.benchmark.campaign import make_specs, run_one
 

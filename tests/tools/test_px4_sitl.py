@@ -32,7 +32,7 @@ from silbridge.tools.logs.mcap_log import read_log
 PX4 = os.environ.get("SILBRIDGE_PX4")
 pytestmark = pytest.mark.skipif(
     not PX4, reason="set SILBRIDGE_PX4 to a PX4 v1.15 SITL bin/px4 (etc/ beside bin/) to fly "
-                    "it end to end (none here; see README 'PX4 SITL')")
+                    "it end to end (none here; see docs/tutorials/arducopter-and-px4.md)")
 CLI = [sys.executable, "-m", "silbridge.tools"]
 
 HOVER_5M = """
