@@ -29,6 +29,7 @@ import numpy as np
 
 from silbridge.bridge import scenario_schema as S
 from silbridge.bridge.errors import ScenarioError
+from silbridge.magfield import field_at
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
@@ -224,6 +225,9 @@ class _Resolver:
             if not isinstance(tbl, dict):
                 self.fail(sec, "must be a table, e.g. [" + sec + "]")
             sections[sec] = Section(self.table(sec + ".", tbl, schema))
+        mag, home = sections["mag"], sections["home"]
+        if mag.field_ned_gauss is None:      # undeclared: the Earth's field at this home
+            mag.field_ned_gauss = field_at(home.lat_deg, home.lon_deg).ned_gauss
         dists = [Section(self.entry(f"disturbance[{i}]", e, S.DISTURBANCE_COMMON, S.DISTURBANCE_TYPES))
                  for i, e in enumerate(self.array("disturbance"))]
         sps = [Section(self.entry(f"setpoint[{i}]", e, S.SETPOINT_COMMON, S.SETPOINT_TYPES))

@@ -35,11 +35,14 @@ Sensor defaults, with sources:
 - Baro: TE MS5611 (Pixhawk) at OSR 4096, RMS resolution 0.012 mbar = 1.2 Pa;
   conversion time 9.04 ms, modelled as a 10 ms first-order lag.
 - Magnetometer: ST LIS3MDL, RMS noise 3.2 mgauss (ultra-high-performance
-  mode). Field at the default home (PX4's default SITL home, Zurich
-  47.397742 N, 8.545594 E, 488 m) from the World Magnetic Model 2025 (NOAA
-  coefficients WMM_2025.COF, evaluated with the pygeomag package) for 2026.0:
-  north 0.2152, east 0.0133, down 0.4329 gauss (declination 3.55 deg,
-  inclination 63.52 deg, total 0.4836 gauss). Fixed here, never JSBSim's
+  mode). Field: unless the scenario declares mag.field_ned_gauss, the World
+  Magnetic Model 2025 (NOAA coefficients WMM_2025.COF, evaluated with the
+  pygeomag package) for 2026.0 at the home, read from the committed grid
+  silbridge/magfield_grid.py (the table the FC's COMPASS_AUTODEC reads, so
+  the FC's declination is the world's). At the default home (PX4's default
+  SITL home, Zurich 47.397742 N, 8.545594 E) that is north 0.2159, east
+  0.0133, down 0.4324 gauss (declination 3.53 deg; the exact model at 488 m:
+  3.55 deg, inclination 63.52 deg, total 0.4836 gauss). Never JSBSim's
   wall-clock WMM, so runs are deterministic.
 - GNSS: u-blox M8 class receiver: 2.5 m CEP autonomous -> 2.12 m one-sigma per
   horizontal axis (CEP = 1.1774 sigma), vertical 1.5x horizontal = 3.2 m,
@@ -133,7 +136,8 @@ SECTIONS = {
     "mag": {
         "rate_hz": F("float", 100.0, above=0, unit="Hz"),
         "noise_gauss": F("float", 0.0032, min=0, unit="gauss"),
-        "field_ned_gauss": F("vec3", (0.2152, 0.0133, 0.4329), unit="gauss"),
+        "field_ned_gauss": F("vec3", None, unit="gauss",
+                             text="Earth field; default: the WMM grid at home (silbridge/magfield.py)"),
         "offset_gauss": F("vec3", (0.0, 0.0, 0.0), drawable=True, unit="gauss",
                           text="hard-iron offset, FRD"),
     },

@@ -10,6 +10,8 @@ ground calibration), and arming earlier leaves a bias that tilts the hover.
 
 from __future__ import annotations
 
+from .autodec import AutoDeclination
+
 _NS = 1_000_000_000
 
 
@@ -19,10 +21,24 @@ class AutoFlight:
         self.arm_at_ns = int(arm_after_s * _NS)
         self.sink = sink
         self.armed_at_ns = None
+        self.autodec = AutoDeclination()
+        self._dec_done = False       # the origin is the first 3D fix: looked up once
 
     def after_batch(self, loop, recs, pwm, status) -> None:
+        if not self._dec_done:
+            self._auto_declination()
         if self.armed_at_ns is None and loop.last_sim_ns >= self.arm_at_ns:
             self.core.arm()
             self.armed_at_ns = loop.last_sim_ns
             if self.sink is not None:
                 self.sink.event(loop.last_sim_ns, "mode", "armed (auto take-off)")
+
+    def _auto_declination(self) -> None:
+        fix = self.core.gnss()
+        if fix is None or fix["fix_type"] < 3:
+            return
+        self._dec_done = True
+        dec = self.autodec.due(self.core.get_param("COMPASS_AUTODEC"),
+                               fix["lat_e7"], fix["lon_e7"])
+        if dec is not None:
+            self.core.set_param("COMPASS_DEC", dec)

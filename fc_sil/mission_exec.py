@@ -1,51 +1,100 @@
-"""Mission execution for AUTO: the items of the MissionStore (home at seq 0), one at a time.
+"""Mission execution for AUTO: the MissionStore's items (home at seq 0), as ArduCopter runs them.
 
-Supported (mavlink/gcs/mission_store.py accepts exactly these): NAV_TAKEOFF (z = altitude),
-NAV_WAYPOINT (p1 = hold time s; lat/lon 0 = here), NAV_LOITER_TIME (p1 = time s),
-NAV_LAND (lat/lon 0 = here), NAV_RETURN_TO_LAUNCH, DO_CHANGE_SPEED (p2 = m/s, -1 = keep).
-Altitudes: relative frames above home, absolute frames above mean sea level (home altitude
-subtracted), terrain frames as relative (we have no terrain data).
+Which command runs when is mission_seq.py's MissionCursor (AP_Mission's rules, DO_JUMP
+included): one navigation command at a time (mission_nav.py, mission_land.py), and beside
+it, one at a time, the DO / CONDITION commands found before it:
 
-As ArduCopter: starting AUTO while armed and landed needs a TAKEOFF as the first nav item
-("Missing Takeoff Cmd"); MISSION_ITEM_REACHED goes out for every nav item reached (take-off,
-waypoints, the RTL and LAND items at touchdown); MISSION_CURRENT reports the item in
-progress with mission_state ACTIVE, PAUSED (AUTO left), COMPLETE after the last item.
-After the last item the vehicle holds position where it is (or stays landed).
+  DO_CHANGE_SPEED     p1 0/1 (air/ground speed), p2 m/s > 0: the horizontal speed
+  DO_SET_ROI(_LOCATION) face the item's location (0, 0, 0: stop), DO_SET_ROI_NONE: stop
+  CONDITION_DELAY     hold back the DO commands after it for p1 seconds
+  CONDITION_YAW       turn to p1 deg at p2 deg/s (0: ATC_SLEW_YAW), p3 direction, p4 relative
+
+Altitudes: relative frames above home, absolute frames above mean sea level, terrain frames
+as relative (no terrain data). A position of lat/lon 0 means where the previous leg ended
+(or here), an altitude of 0 the altitude there, as ArduCopter's loc_from_cmd.
+
+What a GCS sees, as ArduCopter 4.6 sends it: "Mission: <seq> <type>" when a command starts
+(and "Mission: <seq> Jump <n>/<total>" when a DO_JUMP is taken); MISSION_ITEM_REACHED when one
+completes, DO commands included (ArduCopter sends the item-reached message deferred, so of
+several completing in the same step only the last goes out: WP 2 then its DO 3 gives one
+MISSION_ITEM_REACHED 3; the vehicle's "Reached command #<seq>" text goes with it, which
+ArduCopter sends for waypoints and loiters only);
+MISSION_CURRENT reports the navigation command (after a DO_JUMP its target), ACTIVE, PAUSED
+(AUTO left), COMPLETE after the last command. Starting AUTO armed on the ground needs a
+TAKEOFF first ("Auto: Missing Takeoff Cmd"). After the last command the vehicle holds
+position where it is (or stays landed).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
-from .modes import RtlSequence
+from .mission_land import LandRun, RtlRun, TakeoffRun
+from .mission_nav import CircleRun, DelayRun, SplineRun, WaypointRun
+from .mission_seq import MissionCursor
+from .mission_yaw import MissionYaw
+from .nav_spline import SplineLimits
 
 REL_FRAMES = frozenset({mav.MAV_FRAME_GLOBAL_RELATIVE_ALT, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
                         mav.MAV_FRAME_GLOBAL_TERRAIN_ALT, mav.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT})
-NAV_COMMANDS = frozenset({mav.MAV_CMD_NAV_WAYPOINT, mav.MAV_CMD_NAV_TAKEOFF,
-                          mav.MAV_CMD_NAV_LAND, mav.MAV_CMD_NAV_RETURN_TO_LAUNCH,
-                          mav.MAV_CMD_NAV_LOITER_TIME})
+RUNNERS = {mav.MAV_CMD_NAV_TAKEOFF: TakeoffRun, mav.MAV_CMD_NAV_WAYPOINT: WaypointRun,
+           mav.MAV_CMD_NAV_LOITER_TIME: WaypointRun, mav.MAV_CMD_NAV_SPLINE_WAYPOINT: SplineRun,
+           mav.MAV_CMD_NAV_LOITER_TURNS: CircleRun, mav.MAV_CMD_NAV_DELAY: DelayRun,
+           mav.MAV_CMD_NAV_LAND: LandRun, mav.MAV_CMD_NAV_RETURN_TO_LAUNCH: RtlRun}
+NAV_COMMANDS = frozenset(RUNNERS)
+# AP_Mission's names in "Mission: <seq> <name>"
+TYPE_NAMES = {mav.MAV_CMD_NAV_TAKEOFF: "Takeoff", mav.MAV_CMD_NAV_WAYPOINT: "WP",
+              mav.MAV_CMD_NAV_LOITER_TIME: "LoitTime", mav.MAV_CMD_NAV_SPLINE_WAYPOINT: "SplineWP",
+              mav.MAV_CMD_NAV_LOITER_TURNS: "LoitTurns", mav.MAV_CMD_NAV_DELAY: "Delay",
+              mav.MAV_CMD_NAV_LAND: "Land", mav.MAV_CMD_NAV_RETURN_TO_LAUNCH: "RTL",
+              mav.MAV_CMD_DO_CHANGE_SPEED: "ChangeSpeed", mav.MAV_CMD_DO_SET_ROI: "SetROI",
+              mav.MAV_CMD_DO_SET_ROI_LOCATION: "SetROILocation",
+              mav.MAV_CMD_DO_SET_ROI_NONE: "SetROINone", mav.MAV_CMD_CONDITION_DELAY: "CondDelay",
+              mav.MAV_CMD_CONDITION_YAW: "CondYaw"}
+
+
+@dataclass
+class MissionConfig:
+    circle_radius_m: float = 10.0          # CIRCLE_RADIUS / 100
+    circle_rate_rad_s: float = math.radians(20.0)   # CIRCLE_RATE
+    accel_z_m_s2: float = 1.0              # WPNAV_ACCEL_Z / 100
+    jerk_m_s3: float = 1.0                 # WPNAV_JERK
+
+    @classmethod
+    def from_store(cls, get) -> "MissionConfig":
+        return cls(circle_radius_m=get("CIRCLE_RADIUS") * 0.01,
+                   circle_rate_rad_s=math.radians(get("CIRCLE_RATE")),
+                   accel_z_m_s2=get("WPNAV_ACCEL_Z") * 0.01, jerk_m_s3=get("WPNAV_JERK"))
 
 
 class MissionExecutor:
     def __init__(self):
         self.items: tuple = ()
-        self.current = 0                 # seq of the item in progress (0: not started)
+        self.cursor = MissionCursor()
+        self.current = 0                 # the navigation command's seq (0: not started)
         self.state = mav.MISSION_STATE_NOT_STARTED
-        self.item_state = None           # per-item progress (see _begin)
-        self.hold_until_ns = None
-        self.rtl: RtlSequence | None = None
+        self.nav = None                  # the navigation command's runner
+        self.do_started_ns = None
+        self.yaw = MissionYaw()
+        self.leg_end = None              # mission_nav.LegEnd of the last waypoint-type leg
         self.hold_ne = None
+        self.cfg = MissionConfig()
+        self._reached = None             # the last command completed in this step
+        self._v = None
 
-    # ---- from the GCS -----------------------------------------------------------------------
+    # ---- from the GCS -----------------------------------------------------------------
 
     def set_items(self, items, v) -> None:
         """A new mission; a running one restarts at item 1 the next time AUTO starts."""
         self.items = tuple(items)
+        self.cursor = MissionCursor(self.items)
         self.current = 0
+        self.nav = None
         self.state = (mav.MISSION_STATE_NOT_STARTED if len(self.items) > 1
                       else mav.MISSION_STATE_NO_MISSION)
         if v.mode.number == CopterMode.AUTO:
@@ -57,20 +106,22 @@ class MissionExecutor:
         if not 0 < seq < len(self.items):
             return f"Mission has no item {seq}"
         self.current = seq
-        if v.mode.number == CopterMode.AUTO:
-            self._begin(v)
+        if self.state == mav.MISSION_STATE_COMPLETE:
+            # AP_Mission: the next start resumes here, every jump unused again
+            self.cursor.reset()
+            self.state = mav.MISSION_STATE_PAUSED
+        if v.mode.number == CopterMode.AUTO and self.state == mav.MISSION_STATE_ACTIVE:
+            self._load(v, seq)
         return None
 
     def count(self) -> int:
         return max(0, len(self.items) - 1)
 
-    def first_nav(self, start: int = 1):
-        for it in self.items[start:]:
-            if it.command in NAV_COMMANDS:
-                return it
-        return None
+    @property
+    def item_state(self) -> str | None:
+        return self.nav.state if self.nav is not None else None
 
-    # ---- mode hooks -------------------------------------------------------------------------
+    # ---- mode hooks -------------------------------------------------------------------
 
     def start(self, v, first: int | None = None) -> str | None:
         if len(self.items) <= 1:
@@ -82,135 +133,146 @@ class MissionExecutor:
         elif self.current <= 0 or self.current >= len(self.items) \
                 or self.state == mav.MISSION_STATE_COMPLETE:
             self.current = 1
-        if v.armed and not v.airborne:
-            nav = self.first_nav(self.current)
-            if nav is None or nav.command != mav.MAV_CMD_NAV_TAKEOFF:
-                return "Auto: Missing Takeoff Cmd"
+            self.cursor.reset()
+        if v.armed and not v.airborne and not self.cursor.starts_with_takeoff(self.current):
+            return "Auto: Missing Takeoff Cmd"
+        self.cfg = MissionConfig.from_store(v.store.host)
+        self.yaw.begin(v)
         self.state = mav.MISSION_STATE_ACTIVE
-        self._begin(v)
+        self._load(v, self.current)
         return None
+
+    def on_disarm(self) -> None:
+        """ArduCopter resets the mission at every disarm: MISSION_CURRENT reports 0 and the
+        next AUTO starts from the first item, every jump unused."""
+        self.current = 0
+        self.cursor.reset()
+        self.nav = None
 
     def pause(self, v) -> None:
         if self.state == mav.MISSION_STATE_ACTIVE:
             self.state = mav.MISSION_STATE_PAUSED
         v.takeoff_in_progress = False
 
-    # ---- execution --------------------------------------------------------------------------
+    # ---- what runners share -----------------------------------------------------------
 
-    def _alt_m(self, it, v) -> float:
+    def alt_m(self, it, v) -> float:
         if it.frame in REL_FRAMES:
             return v.alt_from_home(float(it.z))
         return v.alt_from_msl(float(it.z))
 
-    def _dest_ne(self, it, v):
-        if it.x == 0 and it.y == 0:
-            return tuple(v.est.pos_ne_m)
-        return v.est.origin.to_ne(it.x, it.y)
+    def loc(self, it, v, default=None):
+        """(n, e, up) of an item; lat/lon 0 and altitude 0 take the default's (the end of
+        the last leg, else where the vehicle is)."""
+        if default is None:
+            default = self.leg_end.point if self.leg_end is not None else \
+                (v.est.pos_ne_m[0], v.est.pos_ne_m[1], v.alt_m)
+        ne = default[:2] if it.x == 0 and it.y == 0 else v.est.origin.to_ne(it.x, it.y)
+        alt = default[2] if it.z == 0 else self.alt_m(it, v)
+        return (float(ne[0]), float(ne[1]), float(alt))
 
-    def _begin(self, v) -> None:
-        """Start the item at self.current (DO items run at once and advance)."""
-        while 0 < self.current < len(self.items):
-            it = self.items[self.current]
-            if it.command == mav.MAV_CMD_DO_CHANGE_SPEED:
-                if math.isfinite(it.param2) and it.param2 > 0:
-                    v.speed_override_m_s = float(it.param2)
-                self.current += 1
-                continue
-            break
-        if self.current >= len(self.items):
+    def next_nav(self, index: int):
+        j = self.cursor.next_nav(index + 1)
+        return None if j is None else self.items[j]
+
+    def spline_limits(self, v) -> SplineLimits:
+        wp = v.cfg.wp
+        return SplineLimits(speed_xy_m_s=v.speed_override_m_s or wp.speed_m_s,
+                            speed_up_m_s=wp.up_m_s, speed_dn_m_s=wp.dn_m_s,
+                            accel_xy_m_s2=wp.accel_m_s2, accel_z_m_s2=self.cfg.accel_z_m_s2,
+                            jerk_m_s3=self.cfg.jerk_m_s3, radius_m=wp.radius_m,
+                            pos_p=v.cfg.pos.pos_p)
+
+    def say(self, text: str) -> None:
+        if self._v is not None:
+            self._v.statustext(mav.MAV_SEVERITY_INFO, text)
+
+    # ---- execution --------------------------------------------------------------------
+
+    def _load(self, v, start: int) -> None:
+        """Make the navigation command at or after `start` current (ArduCopter's
+        set_current_cmd / the advance after a command completes)."""
+        self._v = v
+        nav, first_do = self.cursor.advance_nav(start)
+        self._flush_texts(v)
+        if first_do is not None:
+            self._start_do(v, first_do)
+        if nav is None:
             self._complete(v)
             return
-        it = self.items[self.current]
-        self.hold_until_ns = None
-        self.rtl = None
-        self.item_state = "go"
-        c = it.command
-        if c == mav.MAV_CMD_NAV_TAKEOFF:
-            self.item_state = "takeoff"
-            self.takeoff_alt_m = max(self._alt_m(it, v), v.cfg.takeoff_min_m)
-            self.hold_ne = tuple(v.est.pos_ne_m)
-            if v.airborne and v.alt_m >= self.takeoff_alt_m - v.cfg.takeoff_done_m:
-                self._reached(v)        # already up there: ArduCopter skips the climb
-                return
-            v.takeoff_in_progress = True
-        elif c in (mav.MAV_CMD_NAV_WAYPOINT, mav.MAV_CMD_NAV_LOITER_TIME):
-            v.start_track(self._dest_ne(it, v), self._alt_m(it, v), v.speed_override_m_s)
-            v.face_track(rtl=False)
-        elif c == mav.MAV_CMD_NAV_LAND:
-            dest = self._dest_ne(it, v)
-            v.start_track(dest, v.alt_m, v.speed_override_m_s)
-            self.hold_ne = dest
-            self.item_state = "land_approach"
-        elif c == mav.MAV_CMD_NAV_RETURN_TO_LAUNCH:
-            self.rtl = RtlSequence(v)
-            self.item_state = "rtl"
+        self.current = nav
+        it = self.items[nav]
+        v.statustext(mav.MAV_SEVERITY_INFO, f"Mission: {nav} {TYPE_NAMES[it.command]}")
+        self.nav = RUNNERS[it.command](self, v, nav, it)
 
     def run(self, v, dt_s: float) -> None:
-        if self.state != mav.MISSION_STATE_ACTIVE:
+        self._v = v
+        self._reached = None
+        if self.state != mav.MISSION_STATE_ACTIVE or self.nav is None:
             # complete (or no mission): hold where we are, or stay on the ground
             v.command_vertical(dt_s, v.alt_hold_m)
             v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
+            self.yaw.apply(v, dt_s, (0.0, 0.0), v.cfg.wp.speed_m_s)
             return
-        it = self.items[self.current]
-        st = self.item_state
-        if st == "takeoff":
-            v.command_vertical(dt_s, self.takeoff_alt_m)
-            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
-            v.hold_heading()
-            if v.airborne and v.alt_m >= self.takeoff_alt_m - v.cfg.takeoff_done_m:
-                v.takeoff_in_progress = False
-                v.alt_hold_m = self.takeoff_alt_m
-                self._reached(v)
-        elif st == "go":
-            if v.fly_track(dt_s):
-                delay_s = max(0.0, it.param1) if math.isfinite(it.param1) else 0.0
-                if it.command == mav.MAV_CMD_NAV_LOITER_TIME or delay_s > 0.0:
-                    self.item_state = "hold"
-                    self.hold_until_ns = v.sim_ns + int(delay_s * 1e9)
-                    self.hold_ne = v.track_dest_ne()
-                    v.alt_hold_m = self._alt_m(it, v)
-                    if it.command == mav.MAV_CMD_NAV_WAYPOINT:
-                        v.mission_item_reached(self.current)   # reached on arrival
-                else:
-                    self.hold_ne = v.track_dest_ne()
-                    v.alt_hold_m = self._alt_m(it, v)
-                    self._reached(v)
-        elif st == "hold":
-            v.command_vertical(dt_s, v.alt_hold_m)
-            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
-            if v.sim_ns >= self.hold_until_ns:
-                if it.command == mav.MAV_CMD_NAV_LOITER_TIME:
-                    self._reached(v)
-                else:
-                    self._advance(v)
-        elif st == "land_approach":
-            if v.fly_track(dt_s):
-                self.item_state = "land"
-        elif st == "land":
-            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
-            v.hold_heading()
-            if v.land_descent(dt_s):
-                self._reached(v)
-                v.disarm_landed("AUTO")
-        elif st == "rtl":
-            self.rtl.run(v, dt_s)
-            if self.rtl.done:
-                self._reached(v)
+        nav, seq = self.nav, self.current
+        if nav.run(self, v, dt_s):
+            self._reached = seq
+            if not v.armed:              # landed and disarmed: the mission ends here
+                self._complete(v)
+            elif self.state == mav.MISSION_STATE_ACTIVE:
+                self._load(v, seq + 1)
+        self._run_do(v)
+        if not nav.own_yaw:
+            speed = v.speed_override_m_s or v.cfg.wp.speed_m_s
+            self.yaw.apply(v, dt_s, v.pos_ctl.vel_desired, speed, nav.circle_yaw_rad)
+        if self._reached is not None:
+            v.mission_item_reached(self._reached)
 
-    def _reached(self, v) -> None:
-        v.mission_item_reached(self.current)
-        self._advance(v)
+    def _run_do(self, v) -> None:
+        c = self.cursor
+        if self.state != mav.MISSION_STATE_ACTIVE:
+            return
+        if not c.do_loaded:
+            j = c.advance_do()
+            if j is not None:
+                self._start_do(v, j)
+        elif self._verify_do(v, self.items[c.do_index]):
+            c.do_loaded = False
+            self._reached = c.do_index
 
-    def _advance(self, v) -> None:
-        self.current += 1
-        if self.current >= len(self.items):
-            self._complete(v)
-        else:
-            self._begin(v)
+    def _start_do(self, v, j: int) -> None:
+        it = self.items[j]
+        c = it.command
+        v.statustext(mav.MAV_SEVERITY_INFO, f"Mission: {j} {TYPE_NAMES.get(c, '?')}")
+        self.do_started_ns = v.sim_ns
+        if c == mav.MAV_CMD_DO_CHANGE_SPEED:
+            if it.param2 > 0 and int(it.param1) in (0, 1):
+                v.change_speed(float(it.param2), int(it.param1))
+        elif c in (mav.MAV_CMD_DO_SET_ROI, mav.MAV_CMD_DO_SET_ROI_LOCATION,
+                   mav.MAV_CMD_DO_SET_ROI_NONE):
+            at_zero = it.x == 0 and it.y == 0 and it.z == 0
+            none = c == mav.MAV_CMD_DO_SET_ROI_NONE or at_zero
+            self.yaw.set_roi(v, None if none else v.est.origin.to_ne(it.x, it.y))
+        elif c == mav.MAV_CMD_CONDITION_YAW:
+            self.yaw.set_fixed(v, it.param1, it.param2, int(it.param3), it.param4 > 0)
+
+    def _verify_do(self, v, it) -> bool:
+        if it.command == mav.MAV_CMD_CONDITION_DELAY:
+            return v.sim_ns - self.do_started_ns > max(0.0, it.param1) * 1e9
+        if it.command == mav.MAV_CMD_CONDITION_YAW:
+            self.yaw.keep_fixed(v)       # a waypoint may have taken the heading back
+            return self.yaw.fixed_reached(v)
+        return True
+
+    def _flush_texts(self, v) -> None:
+        for text in self.cursor.texts:
+            v.statustext(mav.MAV_SEVERITY_INFO, text)
+        self.cursor.texts.clear()
 
     def _complete(self, v) -> None:
-        self.current = len(self.items) - 1
         self.state = mav.MISSION_STATE_COMPLETE
+        self.nav = None
         self.hold_ne = tuple(v.est.pos_ne_m)
+        self.yaw.hold(v)
         v.alt_hold_m = v.alt_m if v.airborne else 0.0
         v.statustext(mav.MAV_SEVERITY_INFO, "Mission complete")

@@ -11,10 +11,10 @@ one waypoint navigator and one vertical channel, as in ArduCopter.
   ALT_HOLD  2  pilot lean angles and yaw rate; throttle stick = climb rate, centred = hold
   AUTO      3  the mission (mission_exec.py)
   GUIDED    4  GCS targets: take-off, position, velocity (GUID_TIMEOUT), reposition
-  LOITER    5  position hold; sticks = horizontal velocity up to LOIT_SPEED
+  LOITER    5  position hold; sticks = acceleration, up to LOIT_SPEED; centred = brake, hold
   RTL       6  climb to RTL_ALT, fly home, loiter RTL_LOIT_TIME, land (or hover RTL_ALT_FINAL)
   LAND      9  hold position (when there is one) and descend; disarm on touchdown
-  BRAKE    17  stop as fast as WPNAV_ACCEL allows, then hold
+  BRAKE    17  stop at 7.5 m/s^2 along a jerk-limited path, then hold
 """
 
 from __future__ import annotations
@@ -22,6 +22,11 @@ from __future__ import annotations
 import math
 
 from silbridge.mavlink.gcs.vehicle_api import CopterMode
+
+from .nav_loiter import LoiterNav
+
+# ArduCopter's BRAKE_MODE_DECEL_RATE (750 cm/s^2): Brake stops harder than WPNAV_ACCEL
+BRAKE_DECEL_M_S2 = 7.5
 
 
 class Mode:
@@ -66,141 +71,45 @@ class AltHold(Mode):
 
 
 class Loiter(Mode):
+    """AC_Loiter: sticks ask for an acceleration, centred sticks brake and hold (nav_loiter)."""
     number, name, requires_position = CopterMode.LOITER, "LOITER", True
 
     def enter(self, v):
         v.reset_vertical()
         v.reset_horizontal()
-        self.hold_ne = None
+        self.nav = LoiterNav(v.cfg.loiter)
+        self.nav.reset(v.pos_ctl.vel_desired, v.pos_ctl.accel_desired)
 
     def run(self, v, dt_s):
         v.pilot_vertical(dt_s)
         roll_in, pitch_in, yaw_in = v.pilot_sticks_rpy()
         v.pilot_yaw(yaw_in)
-        if abs(roll_in) > 0.05 or abs(pitch_in) > 0.05:
-            # sticks: a velocity in the heading frame (pitch forward = stick down = negative)
-            speed = v.cfg.loit_speed_m_s
-            fwd, right = -pitch_in * speed, roll_in * speed
-            c, s = math.cos(v.yaw_rad), math.sin(v.yaw_rad)
-            vel = (fwd * c - right * s, fwd * s + right * c)
-            v.hold_position(dt_s, None, vel, speed)
-            self.hold_ne = None
-        else:
-            if self.hold_ne is None:
-                # brake first; the hold point is where the vehicle comes to rest
-                if math.hypot(*v.est.vel_ne_m_s) < 0.3 or not v.airborne:
-                    self.hold_ne = tuple(v.est.pos_ne_m)
-                else:
-                    v.hold_position(dt_s, None, (0.0, 0.0), v.cfg.loit_speed_m_s)
-                    return
-            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
+        self.nav.cfg = v.cfg.loiter          # a PARAM_SET takes effect at once
+        # AC_Loiter reads the sticks without a dead zone; ours keep the old 5 % one
+        roll_in = roll_in if abs(roll_in) > 0.05 else 0.0
+        pitch_in = pitch_in if abs(pitch_in) > 0.05 else 0.0
+        v.fly_loiter(dt_s, self.nav, roll_in, pitch_in)
 
 
 class Brake(Mode):
+    """Stop at BRAKE_DECEL_M_S2 along a jerk-limited path (PSC_JERK_XY), then hold there."""
     number, name, requires_position, armable = CopterMode.BRAKE, "BRAKE", True, False
 
     def enter(self, v):
         v.reset_vertical()
-        self.hold_ne = None
+        v.reset_horizontal()
+        # ArduCopter: the speed limit is the speed at entry, so the stop never speeds up
+        self.speed_m_s = max(math.hypot(*v.est.vel_ne_m_s), 0.5)
 
     def run(self, v, dt_s):
         v.command_vertical(dt_s, v.alt_hold_m)
-        if self.hold_ne is None and (math.hypot(*v.est.vel_ne_m_s) < 0.2 or not v.airborne):
-            self.hold_ne = tuple(v.est.pos_ne_m)
-        v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
+        v.hold_position(dt_s, None, (0.0, 0.0), self.speed_m_s,
+                        shape_accel_m_s2=BRAKE_DECEL_M_S2)
 
 
-class Guided(Mode):
-    """GCS targets. ``target`` is one of None (hold), ("pos", ne, alt), ("vel", vel_ne, climb,
-    deadline_ns), ("takeoff", alt)."""
-    number, name, requires_position = CopterMode.GUIDED, "GUIDED", True
-
-    def enter(self, v):
-        v.reset_vertical()
-        v.reset_horizontal()
-        self.target = None
-        self.hold_ne = tuple(v.est.pos_ne_m)
-        self.track_to = None
-
-    def start_takeoff(self, v, alt_m: float) -> None:
-        self.target = ("takeoff", alt_m)
-        self.hold_ne = tuple(v.est.pos_ne_m)
-        v.takeoff_in_progress = True
-
-    def go_to(self, v, ne, alt_m: float, speed_m_s: float | None = None) -> None:
-        self.target = ("pos", tuple(ne), alt_m)
-        v.start_track(ne, alt_m, speed_m_s)
-
-    def _end_takeoff(self, v) -> None:
-        """A velocity or attitude target during the take-off ends it where it got to (as
-        ArduCopter: climb 0 then holds the height reached, not the pre-take-off 0 m)."""
-        if self.target is not None and self.target[0] == "takeoff":
-            v.takeoff_in_progress = False
-            v.alt_hold_m = v.alt_m
-
-    def set_velocity(self, v, vel_ne, climb_m_s: float) -> None:
-        self._end_takeoff(v)
-        deadline = v.sim_ns + int(v.cfg.guid_timeout_s * 1e9)
-        self.target = ("vel", tuple(vel_ne), climb_m_s, deadline)
-
-    def set_attitude(self, v, roll_rad: float, pitch_rad: float, yaw_rad: float,
-                     climb_m_s: float) -> None:
-        self._end_takeoff(v)
-        deadline = v.sim_ns + int(v.cfg.guid_timeout_s * 1e9)
-        self.target = ("att", roll_rad, pitch_rad, yaw_rad, climb_m_s, deadline)
-
-    def run(self, v, dt_s):
-        t = self.target
-        if t is not None and t[0] == "att":
-            if v.sim_ns > t[5]:
-                # GUID_TIMEOUT: attitude stream stopped: level out and hold where we stop
-                self.target = ("vel", (0.0, 0.0), 0.0, float("inf"))
-                v.reset_horizontal()
-                v.alt_hold_m = v.alt_m
-                t = self.target
-            else:
-                lim = v.cfg.angle_max_rad
-                v.command_attitude(max(-lim, min(lim, t[1])), max(-lim, min(lim, t[2])))
-                v.yaw_target_rad = t[3]
-                v.yaw_rate_cmd = None
-                if t[4] == 0.0:
-                    v.command_vertical(dt_s, v.alt_hold_m)
-                else:
-                    v.command_climb(dt_s, t[4])
-                return
-        if t is None:
-            v.command_vertical(dt_s, v.alt_hold_m)
-            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
-            v.hold_heading()
-            return
-        kind = t[0]
-        if kind == "takeoff":
-            v.command_vertical(dt_s, t[1])
-            v.hold_position(dt_s, self.hold_ne, (0.0, 0.0), v.cfg.wp.speed_m_s)
-            v.hold_heading()
-            if v.airborne and v.alt_m >= t[1] - v.cfg.takeoff_done_m:
-                v.takeoff_in_progress = False
-                v.alt_hold_m = t[1]
-                self.target = None
-            return
-        if kind == "pos":
-            done = v.fly_track(dt_s)
-            if done:
-                self.hold_ne = t[1]
-                v.alt_hold_m = t[2]
-                self.target = None
-            return
-        if kind == "vel":
-            if v.sim_ns > t[3]:
-                # GUID_TIMEOUT: the stream stopped: stop and hold where we come to rest
-                self.target = ("vel", (0.0, 0.0), 0.0, float("inf"))
-                t = self.target
-            v.hold_position(dt_s, None, t[1], v.cfg.wp.speed_m_s)
-            if t[2] == 0.0:
-                v.command_vertical(dt_s, v.alt_hold_m)
-            else:
-                v.command_climb(dt_s, t[2])
-            v.hold_heading()
+# GUIDED lives in its own file (every GCS target, as ArduCopter 4.6 takes it); it subclasses
+# Mode above, so it is imported here, after Mode exists.
+from .mode_guided import Guided  # noqa: E402
 
 
 class Auto(Mode):

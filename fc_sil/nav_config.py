@@ -12,7 +12,8 @@ import math
 from dataclasses import dataclass, field
 
 from .battery import BatteryConfig
-from .nav_pos import PosGains
+from .nav_loiter import LoiterConfig
+from .nav_pos import G_M_S2, PosGains
 from .nav_wp import WpSpeeds
 
 
@@ -20,6 +21,7 @@ from .nav_wp import WpSpeeds
 class NavConfig:
     pos: PosGains = field(default_factory=PosGains)
     wp: WpSpeeds = field(default_factory=WpSpeeds)
+    loiter: LoiterConfig = field(default_factory=LoiterConfig)
     battery: BatteryConfig = field(default_factory=BatteryConfig)
     angle_max_rad: float = math.radians(30.0)
     pilot_speed_up_m_s: float = 2.5
@@ -69,12 +71,8 @@ class NavConfig:
         up = get("PILOT_SPEED_UP") * cm
         dn = get("PILOT_SPEED_DN") * cm or up
         return cls(
-            pos=PosGains(pos_p=get("PSC_POSXY_P"), vel_p=get("PSC_VELXY_P"),
-                         vel_i=get("PSC_VELXY_I"), vel_d=get("PSC_VELXY_D"),
-                         accel_m_s2=get("WPNAV_ACCEL") * cm, angle_max_rad=angle_max),
-            wp=WpSpeeds(speed_m_s=get("WPNAV_SPEED") * cm, up_m_s=get("WPNAV_SPEED_UP") * cm,
-                        dn_m_s=get("WPNAV_SPEED_DN") * cm, accel_m_s2=get("WPNAV_ACCEL") * cm,
-                        radius_m=get("WPNAV_RADIUS") * cm),
+            pos=_pos_gains(get, angle_max), wp=_wp_speeds(get),
+            loiter=_loiter(get, angle_max),
             battery=BatteryConfig.from_params(get),
             angle_max_rad=angle_max, pilot_speed_up_m_s=up, pilot_speed_dn_m_s=dn,
             pilot_y_rate_rad_s=math.radians(get("PILOT_Y_RATE")),
@@ -96,3 +94,66 @@ class NavConfig:
             compass_use=int(get("COMPASS_USE")), rc_fs_timeout_s=get("RC_FS_TIMEOUT"),
             pid_mask=int(get("GCS_PID_MASK")), pwm_min_us=get("MOT_PWM_MIN"),
             pwm_max_us=get("MOT_PWM_MAX"))
+
+
+def _attitude_jerk_caps(get, accel_m_s2: float) -> float:
+    """Largest horizontal jerk the attitude controller can follow (AC_PosControl): the lean
+    rate limit x g, and half the geometric mean of the acceleration and the lean's angular
+    acceleration limit x g (the attitude shaping must be on for either to bind)."""
+    cap = float("inf")
+    if get("ATC_RATE_FF_ENAB"):
+        rate = min(get("ATC_RATE_R_MAX"), get("ATC_RATE_P_MAX"))
+        if rate > 0.0:
+            cap = math.radians(rate) * G_M_S2
+        snap = math.radians(min(get("ATC_ACCEL_R_MAX"), get("ATC_ACCEL_P_MAX")) * 0.01) * G_M_S2
+        if snap > 0.0:
+            cap = min(cap, 0.5 * math.sqrt(accel_m_s2 * snap))
+    return cap
+
+
+def _pos_angle_max(get, angle_max: float) -> float:
+    psc = get("PSC_ANGLE_MAX")
+    return math.radians(psc) if psc > 0.0 else angle_max
+
+
+def _pos_gains(get, angle_max: float) -> PosGains:
+    accel = get("WPNAV_ACCEL") * 0.01
+    return PosGains(pos_p=get("PSC_POSXY_P"), vel_p=get("PSC_VELXY_P"), vel_i=get("PSC_VELXY_I"),
+                    vel_d=get("PSC_VELXY_D"), vel_imax_m_s2=get("PSC_VELXY_IMAX") * 0.01,
+                    vel_ff=get("PSC_VELXY_FF"), vel_flte_hz=get("PSC_VELXY_FLTE"),
+                    vel_fltd_hz=get("PSC_VELXY_FLTD"),
+                    jerk_m_s3=min(get("PSC_JERK_XY"), _attitude_jerk_caps(get, accel)),
+                    accel_m_s2=accel, speed_m_s=get("WPNAV_SPEED") * 0.01,
+                    angle_max_rad=_pos_angle_max(get, angle_max))
+
+
+def _wp_speeds(get) -> WpSpeeds:
+    cm = 0.01
+    rate = min(get("ATC_RATE_R_MAX"), get("ATC_RATE_P_MAX"))
+    jerk = get("WPNAV_JERK")
+    if rate > 0.0:      # AC_WPNav: the S-curve jerk within what the lean rate limit allows
+        jerk = min(jerk, math.radians(rate) * G_M_S2)
+    # AC_WPNav's snap: the acceleration follows the lean, which the attitude input shaping
+    # moves with time constant ATC_INPUT_TC and angular acceleration ATC_ACCEL_R/P_MAX; half
+    # of what the aircraft could do
+    snap = jerk * math.pi / (2.0 * max(get("ATC_INPUT_TC"), 0.1))
+    ang_acc = math.radians(min(get("ATC_ACCEL_R_MAX"), get("ATC_ACCEL_P_MAX")) * 0.01) * G_M_S2
+    if ang_acc > 0.0:
+        snap = min(snap, ang_acc)
+    return WpSpeeds(speed_m_s=get("WPNAV_SPEED") * cm, up_m_s=get("WPNAV_SPEED_UP") * cm,
+                    dn_m_s=get("WPNAV_SPEED_DN") * cm, accel_m_s2=get("WPNAV_ACCEL") * cm,
+                    radius_m=get("WPNAV_RADIUS") * cm, jerk_m_s3=jerk,
+                    accel_z_m_s2=get("WPNAV_ACCEL_Z") * cm, pos_p=get("PSC_POSXY_P"),
+                    snap_m_s4=0.5 * snap)
+
+
+def _loiter(get, angle_max: float) -> LoiterConfig:
+    pos_angle = _pos_angle_max(get, angle_max)
+    loit = get("LOIT_ANG_MAX")
+    ang = min(math.radians(loit), pos_angle) if loit > 0.0 else min(angle_max, pos_angle) * 2 / 3
+    return LoiterConfig(speed_m_s=get("LOIT_SPEED") * 0.01,
+                        accel_max_m_s2=get("LOIT_ACC_MAX") * 0.01,
+                        brake_accel_m_s2=get("LOIT_BRK_ACCEL") * 0.01,
+                        brake_jerk_m_s3=get("LOIT_BRK_JERK") * 0.01,
+                        brake_delay_s=get("LOIT_BRK_DELAY"), angle_max_rad=ang,
+                        vel_p=get("PSC_VELXY_P"), input_tc_s=get("ATC_INPUT_TC"))

@@ -37,6 +37,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 from . import modes as M
+from .autodec import AutoDeclination
 from .battery import BatteryModel
 from .failsafe import FailsafeMonitor
 from .fence import Geofence
@@ -79,6 +80,7 @@ class Vehicle(NavHelpers, GcsCommands):
         self.cfg = NavConfig.from_store(self.store.host)
         self._cfg_version = self.store.version
         self.est = PositionEstimator(self.cfg.pos_tc_s, self.cfg.vel_tc_s, self.cfg.gps_delay_s)
+        self.autodec = AutoDeclination()    # COMPASS_AUTODEC at the estimator origin
         self.pos_ctl = PosController(self.cfg.pos)
         self.wp = WaypointNav(self.cfg.wp)
         self.battery = BatteryModel(self.cfg.battery, self.cfg.pwm_min_us, self.cfg.pwm_max_us)
@@ -237,6 +239,11 @@ class Vehicle(NavHelpers, GcsCommands):
         if fix is not None and fix["sim_ns"] != self.est.last_fix_sim_ns:
             self.gnss = fix
             self.est.fuse_gnss(fix)
+            o = self.est.origin
+            if o is not None:     # COMPASS_AUTODEC: the value is set, not saved (ArduCopter)
+                dec = self.autodec.due(self.store.host("COMPASS_AUTODEC"), o.lat_e7, o.lon_e7)
+                if dec is not None:
+                    self.store.set("COMPASS_DEC", dec)
             if fix["fix_type"] >= 3 and not self.armed:
                 a = fix["alt_mm"] * 1e-3
                 if self._gnss_alt_filt is None:
@@ -331,6 +338,7 @@ class Vehicle(NavHelpers, GcsCommands):
         self.armed = False
         self.takeoff_in_progress = False
         self._landed_since_ns = None
+        self.mission.on_disarm()
         if text:
             self.statustext(mav.MAV_SEVERITY_INFO, text)
         self._event("disarmed")

@@ -10,18 +10,27 @@ hands it to the C core's altitude controller; ``command_climb`` asks the core fo
 rate; ``land_descent`` descends at WPNAV_SPEED_DN above LAND_ALT_LOW and LAND_SPEED below and
 reports touchdown from the core's land detector. Horizontal: ``hold_position`` runs the
 position controller (only once airborne: on the ground its integrators would wind up against
-friction) and leaves lean angles for the step's single attitude command.
+friction) and leaves lean angles for the step's single attitude command; ``start_track`` /
+``fly_track`` fly a straight leg along its S-curve (nav_wp.py); ``fly_loiter`` turns the
+sticks into shaped targets (nav_loiter.py). As AC_PosControl, a position controller that was
+not run for a few steps starts again from the vehicle's present position and velocity.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
+from .nav_loiter import CORRECTION_POS_M, CORRECTION_SPEED_M_S, LoiterNav
+from .nav_pos import lean_to_accel
 from .nav_wp import WpSpeeds
+
+# the position controller counts as running if it ran within this many outer steps
+_ACTIVE_STEPS = 5
 
 
 class NavHelpers:
@@ -29,7 +38,7 @@ class NavHelpers:
     def _wp_speeds(self, speed_m_s: float | None) -> WpSpeeds:
         sp = self.cfg.wp
         if speed_m_s:
-            return WpSpeeds(speed_m_s, sp.up_m_s, sp.dn_m_s, sp.accel_m_s2, sp.radius_m)
+            return dataclasses.replace(sp, speed_m_s=speed_m_s)
         return sp
 
     def reset_vertical(self) -> None:
@@ -37,7 +46,10 @@ class NavHelpers:
         self.alt_hold_m = self.alt_m if self.airborne else 0.0
 
     def reset_horizontal(self) -> None:
-        self.pos_ctl.reset(self.est.vel_ne_m_s)
+        """Position control takes over here, at the present velocity and commanded lean."""
+        self.pos_ctl.reset(self.est.pos_ne_m, self.est.vel_ne_m_s,
+                           lean_to_accel(self.cmd_roll, self.cmd_pitch, self.yaw_rad))
+        self.pos_ctl.last_update_ns = self.sim_ns
 
     def command_attitude(self, roll_rad: float, pitch_rad: float) -> None:
         self.cmd_roll, self.cmd_pitch = roll_rad, pitch_rad
@@ -71,26 +83,69 @@ class NavHelpers:
         self.alt_target_m = self.alt_hold_m = 0.0
         return False
 
-    def hold_position(self, dt_s: float, target_ne, vel_ne, speed_m_s: float) -> None:
+    def _pos_ctl_ready(self) -> bool:
+        """False (and the controller reset, level) while there is nothing to control."""
+        pc = self.pos_ctl
         if not self.airborne or not self.position_ok():
-            self.pos_ctl.reset(self.est.vel_ne_m_s if self.airborne else (0.0, 0.0))
+            pc.reset(self.est.pos_ne_m, self.est.vel_ne_m_s if self.airborne else (0.0, 0.0))
+            pc.last_update_ns = None
             self.command_attitude(0.0, 0.0)
+            return False
+        if not pc.is_active(self.sim_ns, _ACTIVE_STEPS * self.nav_period_ns):
+            self.reset_horizontal()
+        pc.last_update_ns = self.sim_ns
+        return True
+
+    def hold_position(self, dt_s: float, target_ne, vel_ne, speed_m_s: float,
+                      accel_ne=(0.0, 0.0), *, shape_accel_m_s2: float | None = None) -> None:
+        """target_ne: a point (with its velocity and acceleration fed forward) to follow as
+        given; None: fly the velocity vel_ne, shaped (PSC_JERK_XY, at most shape_accel_m_s2,
+        default WPNAV_ACCEL) and held by a position target that moves along with it."""
+        if not self._pos_ctl_ready():
             return
-        roll, pitch = self.pos_ctl.update(dt_s, self.est.pos_ne_m, self.est.vel_ne_m_s,
-                                          target_pos=target_ne, target_vel=vel_ne,
-                                          speed_max_m_s=speed_m_s, yaw_rad=self.yaw_rad)
+        pc = self.pos_ctl
+        if target_ne is None:
+            pc.input_vel_accel(dt_s, vel_ne, accel_ne, speed_m_s, shape_accel_m_s2)
+        else:
+            pc.set_pos_vel_accel(target_ne, vel_ne, accel_ne)
+        roll, pitch = pc.update(dt_s, self.est.pos_ne_m, self.est.vel_ne_m_s, self.yaw_rad,
+                                speed_m_s, shape_accel_m_s2)
+        self.command_attitude(roll, pitch)
+
+    def fly_loiter(self, dt_s: float, nav: LoiterNav, roll_in: float, pitch_in: float) -> None:
+        """LOITER's horizontal channel: sticks (-1..1) -> AC_Loiter targets -> lean."""
+        if not self._pos_ctl_ready():
+            nav.reset((0.0, 0.0), (0.0, 0.0))
+            return
+        pc = self.pos_ctl
+        pos, vel, acc = nav.update(dt_s, pc.pos_target, roll_in, pitch_in, self.yaw_rad)
+        pc.set_pos_vel_accel(pos, vel, acc)
+        roll, pitch = pc.update(dt_s, self.est.pos_ne_m, self.est.vel_ne_m_s, self.yaw_rad,
+                                CORRECTION_SPEED_M_S, nav.cfg.accel_max_m_s2, CORRECTION_POS_M)
         self.command_attitude(roll, pitch)
 
     def start_track(self, dest_ne, alt_m: float, speed_m_s: float | None) -> None:
+        """A straight leg to dest_ne at alt_m from where the position target is now (the
+        vehicle's position when the controller is not running), at the speed the target
+        already has along the leg."""
         self.wp.sp = self._wp_speeds(speed_m_s or self.speed_override_m_s)
         start_alt = self.alt_target_m if self.airborne else self.alt_m
-        speed = math.hypot(*self.est.vel_ne_m_s) if self.airborne else 0.0
-        self.wp.set_destination(self.est.pos_ne_m, start_alt, dest_ne, alt_m, speed)
+        pc = self.pos_ctl
+        active = self.airborne and pc.is_active(self.sim_ns, _ACTIVE_STEPS * self.nav_period_ns)
+        start = pc.pos_target if active else self.est.pos_ne_m
+        speed = 0.0
+        if active:
+            dn, de = dest_ne[0] - start[0], dest_ne[1] - start[1]
+            d = math.sqrt(dn * dn + de * de + (alt_m - start_alt) ** 2)
+            if d > 1e-6:
+                speed = max(0.0, (pc.vel_desired[0] * dn + pc.vel_desired[1] * de) / d)
+        self.wp.set_destination(start, start_alt, dest_ne, alt_m, speed)
 
     def fly_track(self, dt_s: float) -> bool:
         """Follow the active track; True when its destination is reached."""
-        tp, tv, talt = self.wp.update(dt_s, self.est.pos_ne_m, self.alt_m)
-        self.hold_position(dt_s, tp, tv, self.wp.sp.speed_m_s * 1.2)
+        tp, tv, ta, talt = self.wp.update(dt_s, self.est.pos_ne_m, self.alt_m,
+                                          self.est.vel_ne_m_s, self.climb_m_s)
+        self.hold_position(dt_s, tp, tv, self.wp.sp.speed_m_s, ta)
         self.alt_target_m = talt
         self.alt_hold_m = self.wp.dest[2]
         self.core.set_altitude_target(talt)

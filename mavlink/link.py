@@ -63,7 +63,7 @@ class Link:
         self.codec.send(msg)
         if self.tx.tx_dropped + self.tx.tx_errors == before:
             self.tx.tx_msgs += 1
-            self.tx.tx_by_id[msg.id] += 1
+            self.tx.tx_by_id[msg.get_msgId()] += 1   # not .id: a field of RAW_IMU, BATTERY_STATUS
 
     @property
     def can_send(self) -> bool:
@@ -78,7 +78,7 @@ class Link:
     def _decode(self, data: bytes) -> list[mav.MAVLink_message]:
         msgs = self._decoder.feed(data, self.datagram)
         for m in msgs:
-            self.rx_by_id[m.id] += 1
+            self.rx_by_id[m.get_msgId()] += 1
         return msgs
 
     def counters(self) -> dict:

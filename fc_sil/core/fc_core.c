@@ -59,8 +59,15 @@ fc_status_t fc_core_set_param(fc_core_t *c, uint16_t index, float value)
     if (!fc_config_consistent(&candidate)) {
         return FC_ERR_RANGE;
     }
+    /* A new declination (COMPASS_AUTODEC sets it at the first GNSS fix, after the first
+     * heading) turns the heading at once, as ArduCopter's EKF resets its yaw; left to the
+     * heading loop, the step winds the yaw gyro bias up and takes a minute to unlearn. */
+    const float dec_step_rad = candidate.compass_dec - c->params.compass_dec;
     c->params = candidate;
     fc_core_apply_params(c);
+    if (dec_step_rad != 0.0f && c->ahrs.heading_valid) {
+        fc_mahony_turn_heading(&c->ahrs, dec_step_rad);
+    }
     return FC_OK;
 }
 

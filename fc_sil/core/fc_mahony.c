@@ -54,6 +54,22 @@ void fc_mahony_set_attitude(fc_mahony_t *m, const float q_wxyz[4])
     m->aligned = true;
 }
 
+void fc_mahony_turn_heading(fc_mahony_t *m, float delta_rad)
+{
+    /* A yaw of +delta is a rotation about NED down applied on the left, as the first
+     * heading in fc_mahony_mag is. The held magnetometer error stays right: the rotated
+     * field and the declination move by the same delta. */
+    const float half = 0.5f * delta_rad;
+    const float qz[4] = {cosf(half), 0.0f, 0.0f, sinf(half)};
+    float out[4];
+    fc_quat_mul(qz, m->q_wxyz, out);
+    for (int i = 0; i < 4; i++) {
+        m->q_wxyz[i] = out[i];
+    }
+    fc_quat_normalize(m->q_wxyz);
+    fc_mahony_gnss_forget(m); /* a held GNSS error refers to the old heading */
+}
+
 void fc_mahony_init(fc_mahony_t *m, const fc_mahony_config_t *cfg)
 {
     fc_mahony_configure(m, cfg);

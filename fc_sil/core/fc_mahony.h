@@ -46,8 +46,9 @@
  * their bandwidth rises up to gnss_boost times (fc_sched.h: fc_aid_sched).
  *
  * Heading offset: GNSS velocity is relative to true north, the magnetometer to
- * magnetic north; a wrong COMPASS_DEC (ArduPilot sets it from a table, we take
- * the parameter) turns the estimate's heading, and with a horizontal
+ * magnetic north; a wrong COMPASS_DEC (set by hand, or with COMPASS_AUTODEC 0;
+ * otherwise the host sets it from a WMM table as ArduPilot does) turns the
+ * estimate's heading, and with a horizontal
  * acceleration that heading error tilts the GNSS reference (by tan(tilt) of
  * itself: 2.6 deg at 30 deg for the 4.5 deg of a zero COMPASS_DEC at Zurich).
  * When the acceleration changes direction, the down component of the
@@ -115,6 +116,9 @@ void fc_mahony_init(fc_mahony_t *m, const fc_mahony_config_t *cfg);
 void fc_mahony_configure(fc_mahony_t *m, const fc_mahony_config_t *cfg);
 /* Set the attitude (tests start 30 degrees off); clears bias and integrator. */
 void fc_mahony_set_attitude(fc_mahony_t *m, const float q_wxyz[4]);
+/* Turn the estimate's heading by delta_rad about NED down (a new declination), keeping
+ * bias and integrator: the heading loop would otherwise learn the step as a yaw gyro bias. */
+void fc_mahony_turn_heading(fc_mahony_t *m, float delta_rad);
 /* Roll and pitch from one accelerometer sample, yaw 0. */
 fc_status_t fc_mahony_align(fc_mahony_t *m, const float accel_frd_m_s2[3]);
 fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import os
 import select
@@ -167,7 +168,12 @@ def bench_server_cpu(seconds: float) -> dict:
     snap = VehicleSnapshot(home_set=True, servo_us=(1500,) * 4,
                            pid_rows=tuple(PidTuningRow(a, 1, 1, 0, 0, 0, 0) for a in (1, 2, 3, 4)))
     codec = mav.MAVLink(None, 255, 190)
-    with _served(server, tick=lambda: server.publish(snap)) as (addr, sock):
+    started = time.monotonic()
+
+    def tick() -> None:     # streams run on the snapshots' sim time: let it advance
+        server.publish(dataclasses.replace(
+            snap, time_boot_ms=int((time.monotonic() - started) * 1000)))
+    with _served(server, tick=tick) as (addr, sock):
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
         for msg_id, interval_us in TYPICAL_STREAMS:
             sock.sendto(mav.MAVLink_command_long_message(

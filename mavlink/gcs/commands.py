@@ -127,9 +127,12 @@ class CommandPlanner:
         if c == mav.MAV_CMD_DO_REPOSITION:
             return self._reposition(req)
         if c == mav.MAV_CMD_DO_CHANGE_SPEED:
-            if not math.isfinite(req.p2):
-                return Immediate(mav.MAV_RESULT_DENIED, "Change speed: param2 must be a number")
-            return Call("change_speed", (float(req.p2), _int_or(req.p1, 1)))
+            if not (math.isfinite(req.p2) and req.p2 > 0.0):
+                return Immediate(mav.MAV_RESULT_FAILED)     # ArduCopter 4.6.0: speed must be > 0
+            return Call("change_speed", (float(req.p2),
+                                         float(req.p1) if math.isfinite(req.p1) else 1.0))
+        if c == mav.MAV_CMD_CONDITION_YAW:
+            return self._condition_yaw(req)
         if c == mav.MAV_CMD_DO_SET_HOME:
             return self._set_home(req)
         if c == mav.MAV_CMD_DO_SET_MISSION_CURRENT:
@@ -171,6 +174,17 @@ class CommandPlanner:
         return Call("set_home", (lat_e7, lon_e7, float(req.z), relative))
 
     @staticmethod
+    def _condition_yaw(req: CommandRequest) -> Immediate | Call:
+        """ArduCopter 4.6: p1 angle 0..360 deg, p2 rate deg/s (0 = ATC_SLEW_YAW), p3 direction
+        (-1 counter-clockwise, 1 clockwise, 0 the short way; read as int8), p4 1 relative /
+        0 absolute; anything else FAILED, silently."""
+        if not (0.0 <= req.p1 <= 360.0 and req.p4 in (0.0, 1.0)):
+            return Immediate(mav.MAV_RESULT_FAILED)
+        rate = req.p2 if math.isfinite(req.p2) else 0.0
+        direction = int(max(-128.0, min(127.0, req.p3))) if math.isfinite(req.p3) else 0
+        return Call("condition_yaw", (float(req.p1), float(rate), direction, req.p4 == 1.0))
+
+    @staticmethod
     def _reposition(req: CommandRequest) -> Immediate | Call:
         point = _global_point(req, "Reposition", out_of_range=mav.MAV_RESULT_DENIED)
         if isinstance(point, Immediate):
@@ -178,5 +192,7 @@ class CommandPlanner:
         lat_e7, lon_e7 = point
         if not math.isfinite(req.z):
             return Immediate(mav.MAV_RESULT_DENIED, "Reposition: altitude missing")
+        # param2 bit 0 (MAV_DO_REPOSITION_FLAGS_CHANGE_MODE): switch to GUIDED if need be
+        change_mode = bool(_int_or(req.p2, 0) & mav.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE)
         return Call("reposition", (lat_e7, lon_e7, float(req.z), req.frame, float(req.p1),
-                                   float(req.p4)))
+                                   float(req.p4), change_mode))

@@ -5,9 +5,13 @@ holds it, so a download always returns at least one item. A new mission is check
 item while it arrives and becomes visible only once complete (``replace``), so a failed or
 abandoned upload leaves the previous mission untouched.
 
-What we fly: NAV_WAYPOINT, NAV_TAKEOFF, NAV_LAND, NAV_RETURN_TO_LAUNCH, NAV_LOITER_TIME and
-DO_CHANGE_SPEED, in the global frames (absolute or relative altitude, float or _INT form).
-Commands without a position may also use MAV_FRAME_MISSION, as QGC sends them.
+What we fly (fc_sil/mission_exec.py): NAV_WAYPOINT, NAV_SPLINE_WAYPOINT, NAV_TAKEOFF, NAV_LAND,
+NAV_RETURN_TO_LAUNCH, NAV_LOITER_TIME, NAV_LOITER_TURNS, NAV_DELAY, DO_JUMP, DO_CHANGE_SPEED,
+DO_SET_ROI, DO_SET_ROI_LOCATION, DO_SET_ROI_NONE, CONDITION_DELAY and CONDITION_YAW, in the
+global frames (absolute or relative altitude, float or _INT form). Commands without a position
+may also use MAV_FRAME_MISSION, as QGC sends them. The commands added for missions' paths take
+ArduCopter's parameter rule: a NaN parameter is refused (MAV_MISSION_INVALID_PARAMn); a DO_JUMP
+to an item that does not exist is accepted, as ArduCopter does, and ends the mission when taken.
 """
 
 from __future__ import annotations
@@ -20,13 +24,21 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.mavlink.gcs.vehicle_api import MissionItem
 
+# the commands of missions' paths, with ArduCopter's rule that no parameter may be NaN
+PATH_COMMANDS = frozenset({
+    mav.MAV_CMD_NAV_SPLINE_WAYPOINT, mav.MAV_CMD_NAV_LOITER_TURNS, mav.MAV_CMD_NAV_DELAY,
+    mav.MAV_CMD_DO_JUMP, mav.MAV_CMD_DO_SET_ROI, mav.MAV_CMD_DO_SET_ROI_LOCATION,
+    mav.MAV_CMD_DO_SET_ROI_NONE, mav.MAV_CMD_CONDITION_DELAY, mav.MAV_CMD_CONDITION_YAW,
+})
 SUPPORTED_COMMANDS = frozenset({
     mav.MAV_CMD_NAV_WAYPOINT, mav.MAV_CMD_NAV_TAKEOFF, mav.MAV_CMD_NAV_LAND,
     mav.MAV_CMD_NAV_RETURN_TO_LAUNCH, mav.MAV_CMD_NAV_LOITER_TIME, mav.MAV_CMD_DO_CHANGE_SPEED,
-})
-NAV_COMMANDS = frozenset(SUPPORTED_COMMANDS - {mav.MAV_CMD_DO_CHANGE_SPEED})
+}) | PATH_COMMANDS
+NAV_COMMANDS = frozenset(c for c in SUPPORTED_COMMANDS if c <= mav.MAV_CMD_NAV_LAST)
 POSITION_COMMANDS = frozenset({mav.MAV_CMD_NAV_WAYPOINT, mav.MAV_CMD_NAV_TAKEOFF,
-                               mav.MAV_CMD_NAV_LAND, mav.MAV_CMD_NAV_LOITER_TIME})
+                               mav.MAV_CMD_NAV_LAND, mav.MAV_CMD_NAV_LOITER_TIME,
+                               mav.MAV_CMD_NAV_SPLINE_WAYPOINT, mav.MAV_CMD_NAV_LOITER_TURNS,
+                               mav.MAV_CMD_DO_SET_ROI, mav.MAV_CMD_DO_SET_ROI_LOCATION})
 GLOBAL_FRAMES = frozenset({mav.MAV_FRAME_GLOBAL, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT,
                            mav.MAV_FRAME_GLOBAL_INT, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT})
 NO_POSITION_FRAMES = GLOBAL_FRAMES | {mav.MAV_FRAME_MISSION}
@@ -51,7 +63,7 @@ def check_item(item: MissionItem) -> int:
     params = (item.param1, item.param2, item.param3, item.param4)
     for k, p in enumerate(params):
         # NaN is MAVLink's "use the default / keep"; infinity is never meaningful.
-        if math.isinf(p):
+        if math.isinf(p) or (math.isnan(p) and item.command in PATH_COMMANDS):
             return _PARAM_ERRORS[k]
     if item.command == mav.MAV_CMD_NAV_LOITER_TIME and not (item.param1 >= 0.0):
         return mav.MAV_MISSION_INVALID_PARAM1        # loiter time, s

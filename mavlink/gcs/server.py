@@ -45,6 +45,8 @@ from silbridge.mavlink.gcs.pending_calls import PendingCalls
 from silbridge.mavlink.gcs.server_dispatch import MessageDispatch
 from silbridge.mavlink.gcs.server_hooks import ServerHooks
 from silbridge.mavlink.gcs.server_telemetry import MSG_ID, TelemetrySender
+from silbridge.mavlink.gcs.snapshot_ring import SnapshotRing
+from silbridge.mavlink.gcs.stream_clock import StreamClock
 from silbridge.mavlink.gcs.streams import StreamSchedule
 from silbridge.mavlink.gcs.telemetry import statustext_messages
 from silbridge.mavlink.gcs.vehicle_api import (CommandChannel, ParamStore, SnapshotBox,
@@ -106,9 +108,11 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
         self._links: list[Link] = []
         self._listeners: list[TcpListener] = []
         self._schedules: dict[Link, StreamSchedule] = {}
+        self._stream_clock = StreamClock()      # sim time: every link's streams run on it
+        self._recent = SnapshotRing()           # every snapshot, for the streams
+        self._unix_at_sim0_us: int | None = None
         self._endpoint_of: dict = {}        # link or listener -> endpoint number (SRn_*)
         self._closed_totals: collections.Counter = collections.Counter()
-        now = time.monotonic()
         try:
             for n, ep in enumerate(eps):
                 opened = open_endpoint(ep, sysid, compid)
@@ -116,7 +120,7 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
                 if isinstance(opened, TcpListener):
                     self._listeners.append(opened)
                 else:
-                    self._add_link(opened, now)
+                    self._add_link(opened)
         except Exception:
             self._close_sockets()
             raise
@@ -151,6 +155,7 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
 
     def publish(self, snapshot: VehicleSnapshot) -> None:
         self.snapshots.publish(snapshot)
+        self._recent.put(snapshot)
 
     def service(self, max_calls: int = 64) -> int:
         """Run queued GCS requests on the calling (vehicle) thread."""
@@ -272,7 +277,7 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
                 client = r.accept()
                 if client is not None:
                     self._endpoint_of[client] = self._endpoint_of.get(r, -1)
-                    self._add_link(client, now)
+                    self._add_link(client)
             else:
                 for msg in r.receive():
                     if self.tlog is not None:
@@ -307,10 +312,10 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
         return max(0.0, next_t - time.monotonic())
 
     # -- links ---------------------------------------------------------------------------------------
-    def _add_link(self, link: Link, now: float) -> None:
+    def _add_link(self, link: Link) -> None:
         self._links.append(link)
-        sched = StreamSchedule(now)
-        stream_params.apply_stored(self.params, self._endpoint_of.get(link, -1), sched, now)
+        sched = StreamSchedule(self._stream_clock)
+        stream_params.apply_stored(self.params, self._endpoint_of.get(link, -1), sched)
         self._schedules[link] = sched
 
     def _reap_links(self) -> None:

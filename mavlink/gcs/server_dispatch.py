@@ -11,7 +11,6 @@ ACKed at once, a Call runs on the vehicle thread and is ACKed when the vehicle a
 from __future__ import annotations
 
 import logging
-import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
@@ -93,14 +92,16 @@ class MessageDispatch:
         if start and msg.req_message_rate <= 0:
             return          # ArduCopter ignores a start without a rate
         self._schedules[link].request_data_stream(msg.req_stream_id, msg.req_message_rate,
-                                                  start, now)
+                                                  start)
         for name in stream_params.remember(self.params, self._endpoint_of.get(link, -1),
                                            msg.req_stream_id, msg.req_message_rate, start):
             self._param_changed(name)
 
     def _on_timesync(self, link, msg, now):
         if msg.tc1 == 0:    # a request; answer with our clock in ns, echo theirs
-            self.send(link, mav.MAVLink_timesync_message(time.monotonic_ns(), msg.ts1))
+            # our clock is sim time, as ArduCopter SITL answers (its tc1 runs at --speedup)
+            now_ns = self.snapshots.latest.time_boot_ms * 1_000_000
+            self.send(link, mav.MAVLink_timesync_message(max(1, now_ns), msg.ts1))
 
     def _on_ftp(self, link, msg, now):
         reply = ftp.reply_message(msg, self.sysid, self.compid)
@@ -110,13 +111,11 @@ class MessageDispatch:
     def _on_position_target(self, link, msg, now):
         if not self._for_us(msg.target_system, msg.target_component):
             return
+        # any frame goes on: ArduCopter answers one it cannot fly by stopping (the vehicle's call)
         if msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED":
             target = setpoints.position_target_local(msg)
         else:
             target = setpoints.position_target_global(msg)
-        if target is None:
-            self.stats["setpoints_rejected"] += 1
-            return
         self._submit_setpoint("set_position_target", (target,))
 
     def _on_attitude_target(self, link, msg, now):

@@ -52,13 +52,12 @@ class ServerHooks:
         if interval_us != interval_us:      # NaN
             return cmds.Immediate(mav.MAV_RESULT_DENIED, "Message interval must be a number")
         sched = self._schedules[link]
-        now = time.monotonic()
         if interval_us == 0:
-            sched.set_default(msg_id, now)
+            sched.set_default(msg_id)
         elif interval_us < 0:
-            sched.set_interval(msg_id, None, now)
+            sched.set_interval(msg_id, None)
         else:
-            sched.set_interval(msg_id, interval_us * 1e-6, now)
+            sched.set_interval(msg_id, interval_us)
         return cmds.Immediate(mav.MAV_RESULT_ACCEPTED)
 
     def message_interval(self, link, msg_id: int) -> cmds.Immediate:

@@ -41,7 +41,7 @@ def _name(endpoint: int, stream_id: int) -> str | None:
     return f"SR{endpoint}_{SUFFIX[stream_id]}"
 
 
-def apply_stored(params, endpoint: int, sched: StreamSchedule, now_s: float) -> None:
+def apply_stored(params, endpoint: int, sched: StreamSchedule) -> None:
     """Start a new link's streams at the rates stored for its endpoint."""
     for stream_id in STREAM_GROUPS:
         name = _name(endpoint, stream_id)
@@ -52,7 +52,7 @@ def apply_stored(params, endpoint: int, sched: StreamSchedule, now_s: float) -> 
         except (KeyError, TypeError, ValueError):
             continue
         if hz > 0:
-            sched.request_data_stream(stream_id, hz, True, now_s)
+            sched.request_data_stream(stream_id, hz, True)
 
 
 def remember(params, endpoint: int, stream_id: int, rate_hz: int, start: bool) -> list[str]:

@@ -7,23 +7,29 @@ REQUEST_DATA_STREAM (per group of messages, rate in Hz, 0 or stop = off).
 
 Messages nobody asked for stay off except the few a GCS needs before it asks anything:
 HEARTBEAT (1 Hz, always sent unprompted), SYS_STATUS, EXTENDED_SYS_STATE, MISSION_CURRENT and
-SYSTEM_TIME at 1 Hz. A link that fell behind (a stalled server thread) skips missed sends
-rather than bursting them.
+SYSTEM_TIME at 1 Hz.
+
+Times are the microseconds of the server's StreamClock, the vehicle's simulated time
+(stream_clock.py): rates are per simulated second, as ArduCopter SITL keeps them. Each send
+carries a new vehicle snapshot, so a stream asked for faster than the vehicle publishes
+(50 Hz) goes out once per snapshot. A link that fell behind (a stalled server thread) skips
+missed sends rather than bursting them.
 """
 
 from __future__ import annotations
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
+from silbridge.mavlink.gcs.stream_clock import StreamClock
 from silbridge.mavlink.gcs.telemetry import ENCODERS
 
 M = mav
-DEFAULT_INTERVALS_S: dict[int, float] = {
-    M.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
-    M.MAVLINK_MSG_ID_SYS_STATUS: 1.0,
-    M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 1.0,
-    M.MAVLINK_MSG_ID_MISSION_CURRENT: 1.0,
-    M.MAVLINK_MSG_ID_SYSTEM_TIME: 1.0,
+DEFAULT_INTERVALS_US: dict[int, int] = {
+    M.MAVLINK_MSG_ID_HEARTBEAT: 1_000_000,
+    M.MAVLINK_MSG_ID_SYS_STATUS: 1_000_000,
+    M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 1_000_000,
+    M.MAVLINK_MSG_ID_MISSION_CURRENT: 1_000_000,
+    M.MAVLINK_MSG_ID_SYSTEM_TIME: 1_000_000,
 }
 
 # REQUEST_DATA_STREAM groups (ArduCopter's GCS_MAVLINK_Copter stream lists, our subset).
@@ -52,54 +58,57 @@ STREAMABLE = frozenset(set(ENCODERS) - {M.MAVLINK_MSG_ID_AUTOPILOT_VERSION})
 # DENIED, as ArduCopter answers for messages it cannot send (MAVSDK asks for ALTITUDE,
 # ODOMETRY, ACTUATOR_* and HIL_STATE_QUATERNION and gets COMMAND_DENIED from both).
 NOTHING_TO_SEND = frozenset({M.MAVLINK_MSG_ID_DISTANCE_SENSOR})
-MIN_INTERVAL_S = 0.004        # 250 Hz cap: the vehicle publishes snapshots at 50-100 Hz anyway
-MAX_INTERVAL_S = 3600.0
+MIN_INTERVAL_US = 4_000        # 250 Hz cap: the vehicle publishes snapshots at 50 Hz anyway
+MAX_INTERVAL_US = 3_600_000_000
 
 
 class StreamSchedule:
-    """Per-link message intervals and next send times (seconds, monotonic clock)."""
+    """Per-link message intervals and next send times (microseconds of ``clock``)."""
 
-    def __init__(self, now_s: float):
-        self.intervals_s: dict[int, float] = dict(DEFAULT_INTERVALS_S)
-        self._due_s: dict[int, float] = {mid: now_s for mid in self.intervals_s}
+    def __init__(self, clock: StreamClock):
+        self.clock = clock
+        self.intervals_us: dict[int, int] = dict(DEFAULT_INTERVALS_US)
+        self._due_us: dict[int, int] = {mid: clock.now_us for mid in self.intervals_us}
 
-    def set_interval(self, msg_id: int, interval_s: float | None, now_s: float) -> None:
-        """interval_s None or <= 0: off. Clamped to [MIN_INTERVAL_S, MAX_INTERVAL_S]."""
-        if interval_s is None or interval_s <= 0:
-            self.intervals_s.pop(msg_id, None)
-            self._due_s.pop(msg_id, None)
+    def set_interval(self, msg_id: int, interval_us: float | None) -> None:
+        """interval_us None or <= 0: off. Clamped to [MIN_INTERVAL_US, MAX_INTERVAL_US]."""
+        if interval_us is None or not interval_us > 0:
+            self.intervals_us.pop(msg_id, None)
+            self._due_us.pop(msg_id, None)
             return
-        interval_s = min(max(interval_s, MIN_INTERVAL_S), MAX_INTERVAL_S)
-        self.intervals_s[msg_id] = interval_s
+        iv = round(min(max(interval_us, MIN_INTERVAL_US), MAX_INTERVAL_US))   # inf: the max
+        now = self.clock.now_us
+        self.intervals_us[msg_id] = iv
         # first send soon, then on the new period
-        self._due_s[msg_id] = min(self._due_s.get(msg_id, now_s), now_s + interval_s)
+        self._due_us[msg_id] = min(self._due_us.get(msg_id, now), now + iv)
 
-    def set_default(self, msg_id: int, now_s: float) -> None:
-        self.set_interval(msg_id, DEFAULT_INTERVALS_S.get(msg_id), now_s)
+    def set_default(self, msg_id: int) -> None:
+        self.set_interval(msg_id, DEFAULT_INTERVALS_US.get(msg_id))
 
     def interval_us(self, msg_id: int) -> int:
-        iv = self.intervals_s.get(msg_id)
-        return -1 if iv is None else int(round(iv * 1e6))
+        return self.intervals_us.get(msg_id, -1)
 
-    def request_data_stream(self, stream_id: int, rate_hz: int, start: bool, now_s: float) -> None:
+    def request_data_stream(self, stream_id: int, rate_hz: int, start: bool) -> None:
         groups = (list(STREAM_GROUPS) if stream_id == M.MAV_DATA_STREAM_ALL
                   else [stream_id] if stream_id in STREAM_GROUPS else [])
-        interval = (1.0 / rate_hz) if (start and rate_hz > 0) else None
+        interval = (1e6 / rate_hz) if (start and rate_hz > 0) else None
         for g in groups:
             for mid in STREAM_GROUPS[g]:
-                self.set_interval(mid, interval, now_s)
+                self.set_interval(mid, interval)
 
-    def due(self, now_s: float) -> list[int]:
+    def due(self) -> list[int]:
+        """The messages due at the clock's now; each one's next time moves on a period."""
+        now = self.clock.now_us
         out = []
-        for mid, t in self._due_s.items():
-            if t <= now_s:
+        for mid, t in self._due_us.items():
+            if t <= now:
                 out.append(mid)
-                iv = self.intervals_s[mid]
+                iv = self.intervals_us[mid]
                 t += iv
-                if t <= now_s:            # fell behind: skip, do not burst
-                    t = now_s + iv
-                self._due_s[mid] = t
+                if t <= now:            # fell behind: skip, do not burst
+                    t = now + iv
+                self._due_us[mid] = t
         return out
 
-    def next_due_s(self) -> float | None:
-        return min(self._due_s.values()) if self._due_s else None
+    def next_due_us(self) -> int | None:
+        return min(self._due_us.values()) if self._due_us else None

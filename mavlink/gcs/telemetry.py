@@ -6,13 +6,16 @@ battery in mV/cA, RAW_IMU in mG/mrad/s/mGauss as ArduPilot fills it, and so on).
 fields are clamped to their wire type so an odd snapshot value can never make packing fail.
 
 ``ENCODERS`` maps message id -> encoder; ``TelemetryContext`` carries the few things that are
-not vehicle state (mission total, GCS_PID_MASK, link statistics, wall clock).
+not vehicle state (mission total, GCS_PID_MASK, link statistics, Unix time).
+
+Every time stamp is the vehicle's simulated time, as ArduCopter SITL stamps them: time_boot_ms
+and time_usec from the snapshot, and SYSTEM_TIME's Unix time advancing with sim time (at
+--speedup 5 ArduCopter's time_unix_usec gains 5 s per wall second, like its GPS time).
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from typing import Callable
 
@@ -44,10 +47,7 @@ class TelemetryContext:
     pid_mask: int = 0               # GCS_PID_MASK
     drop_rate_comm_cpct: int = 0    # c% of received frames dropped
     errors_comm: int = 0
-
-    @staticmethod
-    def unix_us() -> int:
-        return time.time_ns() // 1000
+    unix_us: int = 0                # Unix time of the snapshot's sim time (SYSTEM_TIME)
 
 
 def _clamp(v, lo: int, hi: int) -> int:
@@ -94,7 +94,7 @@ def sys_status(s: VehicleSnapshot, ctx: TelemetryContext):
 
 
 def system_time(s: VehicleSnapshot, ctx: TelemetryContext):
-    return [mav.MAVLink_system_time_message(ctx.unix_us(), u32(s.time_boot_ms))]
+    return [mav.MAVLink_system_time_message(max(0, int(ctx.unix_us)), u32(s.time_boot_ms))]
 
 
 def gps_raw_int(s: VehicleSnapshot, ctx: TelemetryContext):
@@ -165,7 +165,9 @@ def global_position_int(s: VehicleSnapshot, ctx: TelemetryContext):
 
 def servo_output_raw(s: VehicleSnapshot, ctx: TelemetryContext):
     servos = [u16(v) for v in s.servo_us[:16]] + [0] * (16 - min(16, len(s.servo_us)))
-    return [mav.MAVLink_servo_output_raw_message(u32(s.time_boot_ms * 1000), 0, *servos)]
+    # time_usec is a uint32 here: it wraps after 71.6 min, as ArduPilot's micros() does
+    return [mav.MAVLink_servo_output_raw_message((s.time_boot_ms * 1000) & 0xFFFFFFFF, 0,
+                                                 *servos)]
 
 
 def rc_channels(s: VehicleSnapshot, ctx: TelemetryContext):

@@ -100,3 +100,24 @@ def test_overrides_and_seed():
     assert sc.disturbances[0].frequency_hz == 1.5
     with pytest.raises(ScenarioError, match="imu.rate_hz"):
         load_scenario("S1", overrides={"imu.rate_hz": -1})
+
+
+def test_the_earth_field_is_the_wmms_at_home_unless_declared():
+    # Undeclared: WMM2025 at the home (through the grid the FC's COMPASS_AUTODEC reads).
+    # Declinations from pygeomag 1.1.0, WMM_2025.COF, 2026.0: Zurich 3.55, Canberra 12.67 deg.
+    import math
+
+    def declination_deg(sc):
+        n, e, _ = sc.mag.field_ned_gauss
+        return math.degrees(math.atan2(e, n))
+
+    zurich = scenario_from_dict(GOOD)
+    assert declination_deg(zurich) == pytest.approx(3.55, abs=0.25)
+    assert zurich.mag.field_ned_gauss[2] > 0                      # northern: dips down
+    canberra = scenario_from_dict({**GOOD, "home": {"lat_deg": -35.363261,
+                                                    "lon_deg": 149.16523}})
+    assert declination_deg(canberra) == pytest.approx(12.67, abs=0.25)
+    assert canberra.mag.field_ned_gauss[2] < 0
+    declared = scenario_from_dict({**GOOD, "mag": {"field_ned_gauss": [0.2, 0.0, 0.4]}})
+    assert declared.mag.field_ned_gauss == (0.2, 0.0, 0.4)
+    assert json.dumps(zurich.to_dict())          # the run log records the field it used

@@ -11,8 +11,8 @@ import pytest
 from silbridge.fc_sil import params as P
 from silbridge.fc_sil.battery import BatteryConfig, BatteryModel
 from silbridge.fc_sil.flight_core import FlightCore
-from silbridge.fc_sil.nav_pos import PosController, PosGains, accel_to_lean, sqrt_controller
-from silbridge.fc_sil.nav_wp import WaypointNav, WpSpeeds
+from silbridge.fc_sil.nav_kinematics import sqrt_controller
+from silbridge.fc_sil.nav_pos import PosController, PosGains, accel_to_lean
 from silbridge.fc_sil.param_store import CoreParamStore
 from silbridge.fc_sil.pilot import PilotInput
 from silbridge.fc_sil.pos_est import GeoOrigin, PositionEstimator, quat_rotate_frd_to_ned
@@ -102,29 +102,17 @@ def test_accel_to_lean_signs_and_limit():
     assert pitch == pytest.approx(-math.radians(30))
 
 
-def test_position_controller_velocity_target_is_shaped_by_the_accel_limit():
-    pc = PosController(PosGains(accel_m_s2=2.5))
-    pc.reset((0.0, 0.0))
-    pc.update(0.02, (0.0, 0.0), (0.0, 0.0), target_pos=(100.0, 0.0), speed_max_m_s=10.0)
-    assert pc.vel_target[0] == pytest.approx(2.5 * 0.02)
+def test_position_controller_velocity_command_is_shaped_by_accel_and_jerk():
+    pc = PosController(PosGains(accel_m_s2=2.5, jerk_m_s3=5.0))
+    pc.reset((0.0, 0.0), (0.0, 0.0))
+    pc.input_vel_accel(0.02, (10.0, 0.0), (0.0, 0.0), 10.0)
+    assert pc.accel_desired[0] == pytest.approx(5.0 * 0.02)      # jerk-limited first step
     for _ in range(500):
-        pc.update(0.02, (0.0, 0.0), (0.0, 0.0), target_pos=(100.0, 0.0), speed_max_m_s=10.0)
-    assert pc.vel_target[0] == pytest.approx(10.0)
-
-
-def test_waypoint_target_point_respects_speeds_and_stops_at_the_destination():
-    wp = WaypointNav(WpSpeeds(speed_m_s=5.0, up_m_s=1.0, dn_m_s=1.0, accel_m_s2=2.5,
-                              radius_m=2.0))
-    wp.set_destination((0.0, 0.0), 10.0, (30.0, 40.0), 20.0)
-    pos, alt = (0.0, 0.0), 10.0
-    for _ in range(3000):                    # the vehicle follows the target point exactly
-        tp, tv, talt = wp.update(0.02, pos, alt)
-        assert math.hypot(*tv) <= 5.0 + 1e-9
-        pos, alt = tp, talt
-    assert wp.reached(pos, alt)
-    assert pos == pytest.approx((30.0, 40.0)) and alt == pytest.approx(20.0)
-    # 10 m of climb at 1 m/s limits the along-track speed: 50 m / (10/51 of the way up)
-    assert wp.bearing_rad == pytest.approx(math.atan2(40.0, 30.0))
+        pc.input_vel_accel(0.02, (10.0, 0.0), (0.0, 0.0), 10.0)
+        assert abs(pc.accel_desired[0]) <= 2.5 + 1e-9
+    assert pc.vel_desired[0] == pytest.approx(10.0, abs=0.01)
+    # the position target moved along with the shaped velocity
+    assert pc.pos_target[0] > 50.0
 
 
 # ---- battery and pilot ---------------------------------------------------------------------------

@@ -171,7 +171,7 @@ class KinematicVehicle:
         self.mission_seq = max(1, first)
         return mav.MAV_RESULT_ACCEPTED, None
 
-    def reposition(self, lat_e7, lon_e7, alt_m, frame, speed_m_s, yaw_deg):
+    def reposition(self, lat_e7, lon_e7, alt_m, frame, speed_m_s, yaw_deg, change_mode=True):
         self._record("reposition", lat_e7, lon_e7, alt_m, frame, speed_m_s, yaw_deg)
         if self.landed:
             return mav.MAV_RESULT_DENIED, "Reposition: take off first"
@@ -179,6 +179,10 @@ class KinematicVehicle:
 
     def change_speed(self, speed_m_s, speed_type):
         self._record("change_speed", speed_m_s, speed_type)
+        return mav.MAV_RESULT_ACCEPTED, None
+
+    def condition_yaw(self, angle_deg, rate_deg_s, direction, relative):
+        self._record("condition_yaw", angle_deg, rate_deg_s, direction, relative)
         return mav.MAV_RESULT_ACCEPTED, None
 
     def set_home(self, lat_e7, lon_e7, alt_m, relative):

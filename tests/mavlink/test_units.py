@@ -3,6 +3,7 @@ stream scheduling, MAVFTP replies, telemetry encoders on odd snapshots."""
 
 from __future__ import annotations
 
+import collections
 import math
 import os
 
@@ -18,6 +19,7 @@ from silbridge.mavlink.gcs.mission_store import MissionStore, check_item
 from silbridge.mavlink.gcs.param_types import coerce
 from silbridge.mavlink.gcs.params_file import (apply_parm, format_value, load_parm, parse_parm,
                                            save_parm, save_store)
+from silbridge.mavlink.gcs.stream_clock import StreamClock
 from silbridge.mavlink.gcs.streams import StreamSchedule
 from silbridge.mavlink.gcs.vehicle_api import MissionItem, VehicleSnapshot
 from silbridge.mavlink.gcs.wpl import format_wpl, parse_wpl
@@ -124,17 +126,61 @@ def test_mission_store_rules():
 
 
 def test_stream_schedule_skips_instead_of_bursting():
-    s = StreamSchedule(0.0)
-    s.set_interval(30, 0.1, 0.0)
-    assert 30 in s.due(0.0)
-    assert 30 not in s.due(0.05)
-    assert 30 in s.due(0.1)
-    assert s.due(5.0).count(30) == 1          # a 5 s stall yields one send, not fifty
-    assert 30 not in s.due(5.05)
-    s.set_interval(30, 1e-9, 6.0)
-    assert s.intervals_s[30] == pytest.approx(0.004)   # clamped to 250 Hz
-    s.request_data_stream(mav.MAV_DATA_STREAM_EXTRA1, 0, False, 6.0)
-    assert 30 not in s.intervals_s
+    clock = StreamClock()
+    s = StreamSchedule(clock)
+    s.set_interval(30, 100_000)
+
+    def due_at(sim_ms):
+        clock.update(sim_ms * 1000, 0)
+        return s.due()
+    assert 30 in due_at(0)
+    assert 30 not in due_at(50)
+    assert 30 in due_at(100)
+    assert due_at(5000).count(30) == 1          # a 5 s stall yields one send, not fifty
+    assert 30 not in due_at(5050)
+    s.set_interval(30, 1e-3)
+    assert s.intervals_us[30] == 4000           # clamped to 250 Hz
+    s.set_interval(31, math.inf)
+    assert s.intervals_us[31] == 3_600_000_000  # clamped to an hour
+    s.request_data_stream(mav.MAV_DATA_STREAM_EXTRA1, 0, False)
+    assert 30 not in s.intervals_us
+
+
+def test_stream_schedule_counts_on_sim_time():
+    # 20 ms snapshots (the vehicle's 50 Hz): 10, 30 and 50 Hz come at their rate per simulated
+    # second, whatever the wall clock did; 100 Hz gets one message per snapshot.
+    clock = StreamClock()
+    s = StreamSchedule(clock)
+    for mid, hz in ((30, 10), (33, 30), (24, 50), (74, 100)):
+        s.set_interval(mid, 1e6 / hz)
+    sent = collections.Counter()
+    for k in range(501):                       # 10 simulated seconds
+        clock.update(k * 20_000, wall_us=k * 4_000)
+        sent.update(s.due())
+    assert sent[30] == 101 and sent[24] == 501 and sent[74] == 501
+    assert 300 <= sent[33] <= 301
+    assert sent[0] == 11                       # HEARTBEAT at 1 Hz of sim time
+
+
+def test_stream_clock_runs_on_sim_time_and_never_back():
+    c = StreamClock()
+    assert c.update(5_000_000, 0) == 5_000_000
+    assert c.update(5_000_000, 900_000) == 5_000_000          # still, within STILL_US
+    assert c.update(5_000_000, 3_000_000) == 7_000_000        # still: the wall clock goes on
+    assert c.update(5_020_000, 3_001_000) == 7_000_000        # moves again: from there
+    assert c.update(5_040_000, 3_002_000) == 7_020_000
+    assert c.update(0, 3_003_000) == 7_020_000                # restarted at 0: never back
+    assert c.update(20_000, 3_004_000) == 7_040_000
+
+
+def test_stream_clock_pace_tells_when_to_wake():
+    c = StreamClock()
+    assert c.wall_us_until(1_000_000) is None                 # no pace yet
+    for k in range(60):                                       # 20 ms snapshots at 5x
+        c.update(k * 20_000, k * 4_000)
+    assert c.pace == pytest.approx(5.0)
+    assert c.wall_us_until(c.now_us + 100_000) == pytest.approx(20_000)
+    assert c.wall_us_until(c.now_us - 1) == 0
 
 
 def test_ftp_replies():

@@ -7,6 +7,7 @@ import sys
 import time
 from pathlib import Path
 
+from silbridge.tools.benchmark.nav.command import SPEED as NAV_SPEED
 from silbridge.tools.benchmark.campaign import (CampaignError, RunSpec, check_executor,
                                                 make_specs, run_campaign)
 from silbridge.tools.benchmark.report import write_report
@@ -26,7 +27,7 @@ def add_campaign_arguments(p) -> None:
     p.add_argument("--scenarios", default="S1,S2,S3,S4",
                    help="comma-separated scenario names or TOML files (default %(default)s)")
     p.add_argument("--runs", type=int, default=20, help="runs per scenario (default %(default)s)")
-    p.add_argument("--duration", type=float, default=120.0, metavar="S",
+    p.add_argument("--duration", type=float, default=PROTOCOL_S, metavar="S",
                    help=f"simulated seconds per run (default %(default)g); shorter than the "
                         f"{PROTOCOL_S:g} s the default windows are made for: they are scaled "
                         f"to fit, and said so")
@@ -69,6 +70,11 @@ def add_campaign_arguments(p) -> None:
 
 
 def add_arguments(p) -> None:
+    p.add_argument("--suite", choices=("paper", "nav"), default="paper",
+                   help="paper: Table 1 (S1..S4, attitude); nav: the navigation benchmark "
+                        "N1..N4 (guided goto, offboard velocity with yaw, AUTO mission with "
+                        "splines, the mission in wind), docs/howto/nav-bench.md "
+                        "(default %(default)s)")
     add_campaign_arguments(p)
     p.add_argument("--fc", default="ours", metavar="ours|ardupilot|px4|ours,ardupilot,px4",
                    help="flight controller(s): our SIL FC, ArduCopter SITL over its JSON "
@@ -80,7 +86,8 @@ def add_arguments(p) -> None:
     add_deprecated_alias(p, "--sitl", "--arducopter")
     p.add_argument("--speed", type=float, default=RunSpec.sitl_speedup, metavar="X",
                    help="--fc ardupilot: SITL's --speedup (lockstep either way; higher only "
-                        "lets SITL run ahead of the wall clock) (default %(default)g)")
+                        "lets SITL run ahead of the wall clock) (default %(default)g); "
+                        f"--suite nav: every FC's times real time (default there {NAV_SPEED:g})")
     add_deprecated_alias(p, "--sitl-speedup", "--speed")
     p.add_argument("--px4", default=None, metavar="PATH",
                    help="--fc px4: the px4 SITL binary, etc/ beside its bin/ (default: "
@@ -158,6 +165,8 @@ def _autopilot_binaries(args, fcs: list[str]) -> tuple[str | None, str | None]:
 
 def run(args) -> int:
     fcs = fc_choice(args.fc)
+    if args.suite == "nav":
+        return _run_nav(args, fcs)
     sitl, px4 = _autopilot_binaries(args, fcs)
     scenarios, windows, params = campaign_inputs(args)
     ours_only = [f for f, given in (("--param/--params", bool(params)),
@@ -231,3 +240,22 @@ def run(args) -> int:
         print(f"logs and tables in {out_dir}/" + (f", report {index}" if index else ""),
               file=sys.stdout)
     return STOP.exit_code(0)
+
+
+def _run_nav(args, fcs: list[str]) -> int:
+    """--suite nav (tools/benchmark/nav/command.py): --speed is every FC's real-time factor
+    there; the binaries are checked before any run, as for the paper suite."""
+    from silbridge.tools.benchmark.nav.command import run_nav
+
+    speed_given = args.speed != RunSpec.sitl_speedup
+    saved, args.speed = args.speed, RunSpec.sitl_speedup   # not an ArduCopter-only flag here
+    sitl, px4 = _autopilot_binaries(args, fcs)
+    args.speed = saved
+    paper = {"--duration": (args.duration, PROTOCOL_S), "--imu-hz": (args.imu_hz, None),
+             "--viz-hz": (args.viz_hz, 0.0)}
+    for name, flag in WINDOW_FLAGS.items():   # a default window is the Windows tuple itself
+        value = getattr(args, "yaw_window" if name == "yaw" else name)
+        paper[flag] = (value, getattr(WINDOWS, name)) if value is getattr(WINDOWS, name) \
+            else (value, None)
+    return run_nav(args, paper, fcs, sitl, px4, speed_given)
+
