@@ -2,7 +2,7 @@
 MAVLink client against our FC, ArduCopter and PX4 on the same JSBSim physics and seeds, and
 scored from the bridge's ground truth (docs/howto/nav-bench.md).
 
-plans.py       what N1..N4 fly (points, legs, missions) and on which physics (physics/)
+plans.py       what N1..N4 fly (points, legs, missions) and on which physics (nav_*.toml)
 geo.py         local NE metres <-> latitude/longitude, as the bridge's ground truth
 link.py        the UDP and TCP byte links
 client.py      the MAVLink client (one codec per link, paced on the vehicle's clock)

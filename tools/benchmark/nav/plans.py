@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-PHYSICS_DIR = Path(__file__).with_name("physics")
+PHYSICS_DIR = Path(__file__).parent
 ALT_M = 10.0               # every plan flies at this height above home [m]
 
 
