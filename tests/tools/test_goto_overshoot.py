@@ -22,6 +22,14 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+import waits  # noqa: E402
+from waits import accepted  # noqa: E402
+
+
+def until(pred, timeout_s, step_s=0.1):      # this file polls faster than waits.until's default
+    return waits.until(pred, timeout_s, step_s)
+
+
 import autopilots  # noqa: E402
 
 from silbridge.tools.benchmark.nav.plans import PHYSICS_DIR  # noqa: E402
@@ -42,16 +50,6 @@ TAKEOFF_M = 10.0
 M_PER_DEG_LAT = 111_320.0
 
 
-def _until(pred, timeout_s, step_s=0.1):
-    end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        v = pred()
-        if v:
-            return v
-        time.sleep(step_s)
-    return None
-
-
 def _north_east(p, lat0, lon0):
     return ((p.latitude_deg - lat0) * M_PER_DEG_LAT,
             (p.longitude_deg - lon0) * M_PER_DEG_LAT * math.cos(math.radians(lat0)))
@@ -68,12 +66,12 @@ def _fly_goto(url: str) -> dict:
         tel.set_rate_velocity_ned(20.0)
         # ArduCopter's SYS_STATUS health bits never satisfy MAVSDK's health_all_ok: wait for
         # a home position, then arm and take off as soon as the autopilot accepts both
-        assert _until(lambda: tel.health().is_home_position_ok, 120.0, 0.5), tel.health()
+        assert until(lambda: tel.health().is_home_position_ok, 120.0, 0.5), tel.health()
         action.set_takeoff_altitude(TAKEOFF_M)
-        assert _until(lambda: _try(action.arm) and _try(action.takeoff), 120.0, 1.0), \
+        assert until(lambda: accepted(action.arm) and accepted(action.takeoff), 120.0, 1.0), \
             "did not arm and take off"
-        assert _until(lambda: tel.position().relative_altitude_m > TAKEOFF_M - 0.5, 90.0)
-        assert _until(lambda: math.hypot(tel.velocity_ned().north_m_s,
+        assert until(lambda: tel.position().relative_altitude_m > TAKEOFF_M - 0.5, 90.0)
+        assert until(lambda: math.hypot(tel.velocity_ned().north_m_s,
                                          tel.velocity_ned().east_m_s) < 0.2
                       and abs(tel.velocity_ned().down_m_s) < 0.2, 60.0)
         time.sleep(2.0)       # let the take-off's transient settle (6-10 s of sim time)
@@ -102,14 +100,6 @@ def _fly_goto(url: str) -> dict:
                     arrived=arrived is not None)
     finally:
         m.destroy()
-
-
-def _try(fn) -> bool:
-    try:
-        fn()
-        return True
-    except Exception:       # ArduCopter refuses to arm until its EKF has settled: ask again
-        return False
 
 
 # GUID_OPTIONS 0 (default): ArduCopter flies a position target with its position controller's

@@ -33,6 +33,14 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+import waits  # noqa: E402
+from waits import accepted  # noqa: E402
+
+
+def until(pred, timeout_s, step_s=0.1):      # this file polls faster than waits.until's default
+    return waits.until(pred, timeout_s, step_s)
+
+
 import autopilots  # noqa: E402
 from gcs_session import GUIDED, Gcs, offset_e7  # noqa: E402
 
@@ -259,22 +267,6 @@ def test_set_attitude_target_flies_forward(flying):
 
 
 # ---- MAVSDK's Offboard, its own flight ----------------------------------------------------------
-def _try(fn) -> bool:
-    try:
-        fn()
-        return True
-    except Exception:       # ArduCopter refuses to arm until its EKF has settled: ask again
-        return False
-
-
-def _until(pred, timeout_s, step_s=0.1):
-    end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        v = pred()
-        if v:
-            return v
-        time.sleep(step_s)
-    return None
 
 
 @pytest.mark.parametrize("kind", autopilots.KINDS)
@@ -297,22 +289,22 @@ def test_mavsdk_offboard_start_velocity_yaw_stop(kind, tmp_path):
         tel, action, off = Telemetry(system), Action(system), Offboard(system)
         tel.set_rate_position(10.0)
         tel.set_rate_attitude_euler(10.0)
-        assert _until(lambda: tel.health().is_home_position_ok, 120.0, 0.5), tel.health()
+        assert until(lambda: tel.health().is_home_position_ok, 120.0, 0.5), tel.health()
         action.set_takeoff_altitude(TAKEOFF_M)
-        assert _until(lambda: _try(action.arm) and _try(action.takeoff), 120.0, 1.0)
-        assert _until(lambda: tel.position().relative_altitude_m > TAKEOFF_M - 0.5, 90.0)
+        assert until(lambda: accepted(action.arm) and accepted(action.takeoff), 120.0, 1.0)
+        assert until(lambda: tel.position().relative_altitude_m > TAKEOFF_M - 0.5, 90.0)
         off.set_velocity_ned(VelocityNedYaw(0.0, 2.0, 0.0, 90.0))
         off.start()
-        assert _until(lambda: tel.flight_mode() == FlightMode.OFFBOARD, 10.0)
+        assert until(lambda: tel.flight_mode() == FlightMode.OFFBOARD, 10.0)
 
         def settled():
             return all(_angle_err(tel.heading().heading_deg, 90.0) <= 3.0
                        for _ in range(5) if not time.sleep(0.05))
-        reached = _until(settled, 30.0, 0.2)
+        reached = until(settled, 30.0, 0.2)
         heading = tel.heading().heading_deg
         east = tel.velocity_ned().east_m_s
         off.stop()
-        hold = _until(lambda: tel.flight_mode() == FlightMode.HOLD, 10.0)
+        hold = until(lambda: tel.flight_mode() == FlightMode.HOLD, 10.0)
         print(f"\n{kind}: offboard VelocityNedYaw(0, 2, 0, 90): heading {heading:.1f}, "
               f"east {east:.2f} m/s; after stop(): {tel.flight_mode()}")
         assert reached, heading

@@ -15,6 +15,8 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+from waits import until  # noqa: E402
+
 from sitl_helpers import SitlVehicle, free_udp_port  # noqa: E402
 
 mavsdk = pytest.importorskip("mavsdk")
@@ -33,16 +35,6 @@ from silbridge.fc_sil import params as P  # noqa: E402
 mavsdk.log_subscribe(lambda level, msg, file, line: True)    # keep MAVSDK's log quiet
 
 
-def _until(pred, timeout_s, step_s=0.2):
-    end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        v = pred()
-        if v:
-            return v
-        time.sleep(step_s)
-    return None
-
-
 @pytest.fixture
 def drone():
     port = free_udp_port()
@@ -57,7 +49,7 @@ def drone():
         raise AssertionError("MAVSDK found no autopilot; vehicle said:\n" + v.stop()[-3000:])
     tel = Telemetry(system)
     tel.set_rate_position(10.0)
-    assert _until(tel.health_all_ok, 60.0), f"health never all ok: {tel.health()}"
+    assert until(tel.health_all_ok, 60.0), f"health never all ok: {tel.health()}"
     yield dict(v=v, m=m, system=system, tel=tel, action=Action(system))
     m.destroy()
     v.stop()
@@ -68,8 +60,8 @@ def test_mavsdk_arm_takeoff_hold_land_disarm(drone):
     action.set_takeoff_altitude(10.0)
     action.arm()
     action.takeoff()
-    assert _until(lambda: tel.position().relative_altitude_m > 9.5, 60.0), "no take-off"
-    assert _until(tel.in_air, 5.0)
+    assert until(lambda: tel.position().relative_altitude_m > 9.5, 60.0), "no take-off"
+    assert until(tel.in_air, 5.0)
     alts = []
     end = time.monotonic() + 2.0                      # 16 s of hover at --speed 8
     while time.monotonic() < end:
@@ -77,8 +69,8 @@ def test_mavsdk_arm_takeoff_hold_land_disarm(drone):
         time.sleep(0.1)
     assert 9.0 < min(alts) and max(alts) < 11.0, (min(alts), max(alts))
     action.land()
-    assert _until(lambda: not tel.armed(), 90.0), "did not land and disarm"
-    assert _until(lambda: not tel.in_air(), 5.0)
+    assert until(lambda: not tel.armed(), 90.0), "did not land and disarm"
+    assert until(lambda: not tel.in_air(), 5.0)
     assert drone["v"].alive()
 
 
@@ -102,10 +94,10 @@ def test_mavsdk_mission_raw_upload_and_fly_to_finished(drone):
     mission.upload_mission(items)
     action.arm()
     mission.start_mission()
-    assert _until(lambda: tel.in_air(), 30.0)
-    done = _until(mission.is_mission_finished, 120.0, 0.5)
+    assert until(lambda: tel.in_air(), 30.0)
+    done = until(mission.is_mission_finished, 120.0, 0.5)
     assert done, f"mission not finished: {mission.mission_progress().current}"
-    assert _until(lambda: not tel.armed(), 60.0), "RTL did not land and disarm"
+    assert until(lambda: not tel.armed(), 60.0), "RTL did not land and disarm"
     p = tel.position()
     north = (p.latitude_deg - lat0) * m_per_deg_lat
     east = (p.longitude_deg - lon0) * m_per_deg_lon

@@ -27,6 +27,8 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+from waits import until  # noqa: E402
+
 from autopilots import KINDS, start  # noqa: E402
 
 mavsdk = pytest.importorskip("mavsdk")
@@ -42,16 +44,6 @@ mavsdk.log_subscribe(lambda level, msg, file, line: True)    # keep MAVSDK's log
 DENIED_BY_ARDUCOPTER = {"set_rate_actuator_control_target", "set_rate_actuator_output_status",
                         "set_rate_altitude", "set_rate_ground_truth", "set_rate_odometry"}
 ARDUCOPTER_SPEEDUP = 5.0
-
-
-def _until(pred, timeout_s, step_s=0.2):
-    end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        v = pred()
-        if v:
-            return v
-        time.sleep(step_s)
-    return None
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -75,7 +67,7 @@ def test_every_set_rate_and_the_position_rate(kind, tmp_path):
         failed = {k: v for k, v in results.items() if v != "SUCCESS"}
         assert set(failed) == DENIED_BY_ARDUCOPTER, failed
         assert set(failed.values()) == {"COMMAND_DENIED"}, failed
-        assert _until(tel.health_all_ok, 60.0), f"health never all ok: {tel.health()}"
+        assert until(tel.health_all_ok, 60.0), f"health never all ok: {tel.health()}"
 
         count = [0]
         lock = threading.Lock()
