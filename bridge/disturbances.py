@@ -86,7 +86,7 @@ class Disturbances:
 
     def attach_kernel(self, kernel) -> None:
         """The simulator's step kernel, which writes the active forces before each physics
-        step (bridge/src/stepmodule.c set_forces; step_python.py is its reference)."""
+        step (bridge/src/step_forces.c set_forces)."""
         self.kernel = kernel
         kernel.set_forces(self._force_plan)
 

@@ -1,8 +1,9 @@
 """Exceptions of the bridge that the `silbridge` command shows to the user.
 
-Both set ``user_facing = True``: the CLI prints the message in one line and
+Each sets ``user_facing = True``: the CLI prints the message in one line and
 exits with status 2, so each message names the offending thing and says what
-to do next.
+to do next. Scenario and simulator errors come before a run starts;
+`BridgeError` and its kinds during one (the FC lost, a start-up check failed).
 """
 
 
@@ -16,3 +17,17 @@ class SimulatorError(RuntimeError):
     """The simulator cannot start (model missing, bad initial conditions, bad rate)."""
 
     user_facing = True
+
+
+class BridgeError(Exception):
+    """A run of the bridge program failed (bridge/bridge_driver.py)."""
+
+    user_facing = True
+
+
+class PeerLost(BridgeError):
+    """The FC died, hung or left during a run."""
+
+
+class StartupCheckFailed(BridgeError):
+    """A start-up check of the paper's procedure (section 4.2) failed."""

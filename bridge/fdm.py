@@ -74,6 +74,27 @@ def _quiet():
     jsbsim.set_logger(_LOGGER)
 
 
+# The FDM sample the bridge's sensor stage reads after every step (bridge/src/sensor_stage.h,
+# sb_fdm_sample): field name -> JSBSim property. The names are the C struct's fields, so the
+# kernel binds each getter by name; JSBSim's own units stay in them (the stage converts).
+SAMPLE_PROPERTIES = {
+    "p_rad_s": "velocities/p-rad_sec", "q_rad_s": "velocities/q-rad_sec",
+    "r_rad_s": "velocities/r-rad_sec",
+    "fbx_lbf": "forces/fbx-total-lbs", "fby_lbf": "forces/fby-total-lbs",
+    "fbz_lbf": "forces/fbz-total-lbs",
+    "phi_rad": "attitude/phi-rad", "theta_rad": "attitude/theta-rad",
+    "psi_rad": "attitude/psi-rad",
+    "vn_ft_s": "velocities/v-north-fps", "ve_ft_s": "velocities/v-east-fps",
+    "vd_ft_s": "velocities/v-down-fps",
+    "lat_rad": "position/lat-geod-rad", "lon_rad": "position/long-gc-rad",
+    "hagl_ft": "position/h-agl-ft",
+    **{f"omega{i}_rad_s": f"fcs/m{i}-omega-rad_s" for i in range(1, 5)},
+    "gear_contacts": "fcs/gear-contacts",
+    "pressure_psf": "atmosphere/P-psf",
+    "temperature_r": "atmosphere/T-R",
+}
+
+
 class Fdm:
     """One JSBSim instance flying the quad model, placed at a home location.
 
@@ -86,6 +107,20 @@ class Fdm:
     def __init__(self, dt_s: float, lat_deg: float, lon_deg: float, ground_alt_m: float,
                  heading_deg: float, initial_agl_m: float = 0.0, random_seed: int = 0,
                  model: str = "quadx"):
+        self.fdm = self._load(dt_s, model)
+        self.dt_s = dt_s
+        self._model = model
+        self.mass_kg = self.fdm["inertia/mass-slugs"] * SLUG_KG
+        # Rest height of the CG: legs compressed by m g / (n k) (no bounce at step 1).
+        self.rest_agl_m = LEG_BELOW_CG_M - self.mass_kg * G0_M_S2 / (LEG_COUNT * LEG_SPRING_N_M)
+        self._place(lat_deg, lon_deg, ground_alt_m, heading_deg, initial_agl_m, random_seed)
+        self._air_integrator = False
+        self._bind_handles()
+        self._set_home(lat_deg, lon_deg, ground_alt_m)
+
+    @staticmethod
+    def _load(dt_s: float, model: str):
+        """A quiet FGFDMExec with the model loaded at step dt_s."""
         _quiet()
         fdm = jsbsim.FGFDMExec(None)
         fdm.set_aircraft_path(str(AIRCRAFT_DIR))
@@ -94,27 +129,17 @@ class Fdm:
             raise SimulatorError(
                 f"JSBSim could not load model {model!r} from {AIRCRAFT_DIR}; "
                 "check that the XML exists and is well formed")
-        self.fdm = fdm
-        self.dt_s = dt_s
-        pm = fdm.get_property_manager()
+        return fdm
 
-        def node(path):
-            n = pm.get_node(path)
-            if n is None:
-                raise SimulatorError(f"model {model!r} lacks property {path}; "
-                                     "it is not a silbridge quad model")
-            return n
-
-        self._node = node
-        self.mass_kg = fdm["inertia/mass-slugs"] * SLUG_KG
-        # Rest height of the CG: legs compressed by m g / (n k) (no bounce at step 1).
-        rest_agl_m = LEG_BELOW_CG_M - self.mass_kg * G0_M_S2 / (LEG_COUNT * LEG_SPRING_N_M)
-        self.rest_agl_m = rest_agl_m
+    def _place(self, lat_deg: float, lon_deg: float, ground_alt_m: float, heading_deg: float,
+               initial_agl_m: float, random_seed: int) -> None:
+        """Initial conditions: level and at rest on (or initial_agl_m above) the legs."""
+        fdm = self.fdm
         fdm["simulation/randomseed"] = int(random_seed) & 0x7FFFFFFF
         fdm["ic/lat-geod-deg"] = lat_deg
         fdm["ic/long-gc-deg"] = lon_deg
         fdm["ic/terrain-elevation-ft"] = ground_alt_m / FT_M
-        fdm["ic/h-agl-ft"] = (rest_agl_m + initial_agl_m) / FT_M
+        fdm["ic/h-agl-ft"] = (self.rest_agl_m + initial_agl_m) / FT_M
         fdm["ic/psi-true-deg"] = heading_deg
         for name in ("ic/phi-deg", "ic/theta-deg", "ic/u-fps", "ic/v-fps", "ic/w-fps",
                      "ic/p-rad_sec", "ic/q-rad_sec", "ic/r-rad_sec"):
@@ -125,38 +150,45 @@ class Fdm:
         fdm["simulation/integrator/position/translational"] = 4
         if not fdm.run_ic():
             raise SimulatorError("JSBSim refused the initial conditions; check the home location")
-        self._air_integrator = False
 
+    def _node(self, path: str):
+        n = self.fdm.get_property_manager().get_node(path)
+        if n is None:
+            raise SimulatorError(f"model {self._model!r} lacks property {path}; "
+                                 "it is not a silbridge quad model")
+        return n
+
+    def _bind_handles(self) -> None:
+        """Property nodes of the inputs, the FDM sample and the disturbance forces."""
+        node = self._node
         # Inputs.
         self.h_pwm = [node(f"fcs/m{i}-pwm-us") for i in range(1, 5)]
         self.h_scale = [node(f"fcs/m{i}-thrust-scale") for i in range(1, 5)]
         self.h_rate_rot = node("simulation/integrator/rate/rotational")
-        # State.
-        self.h_p, self.h_q, self.h_r = (node(f"velocities/{a}-rad_sec") for a in "pqr")
-        self.h_fbx, self.h_fby, self.h_fbz = (node(f"forces/fb{a}-total-lbs") for a in "xyz")
-        self.h_phi, self.h_theta, self.h_psi = (node(f"attitude/{a}-rad")
-                                                for a in ("phi", "theta", "psi"))
-        self.h_vn, self.h_ve, self.h_vd = (node(f"velocities/v-{a}-fps")
-                                           for a in ("north", "east", "down"))
-        self.h_lat = node("position/lat-geod-rad")
-        self.h_lon = node("position/long-gc-rad")
-        self.h_hagl = node("position/h-agl-ft")
-        self.h_pressure = node("atmosphere/P-psf")
-        self.h_temp = node("atmosphere/T-R")
-        self.h_gear = node("fcs/gear-contacts")
-        self.h_omega = [node(f"fcs/m{i}-omega-rad_s") for i in range(1, 5)]
+        # State: the sample's nodes by field name, and the ones Python reads by role.
+        self.sample_nodes = {name: node(path) for name, path in SAMPLE_PROPERTIES.items()}
+        h = self.sample_nodes
+        self.h_p, self.h_q, self.h_r = h["p_rad_s"], h["q_rad_s"], h["r_rad_s"]
+        self.h_fbx, self.h_fby, self.h_fbz = h["fbx_lbf"], h["fby_lbf"], h["fbz_lbf"]
+        self.h_phi, self.h_theta, self.h_psi = h["phi_rad"], h["theta_rad"], h["psi_rad"]
+        self.h_vn, self.h_ve, self.h_vd = h["vn_ft_s"], h["ve_ft_s"], h["vd_ft_s"]
+        self.h_lat, self.h_lon, self.h_hagl = h["lat_rad"], h["lon_rad"], h["hagl_ft"]
+        self.h_pressure, self.h_temp = h["pressure_psf"], h["temperature_r"]
+        self.h_gear = h["gear_contacts"]
+        self.h_omega = [h[f"omega{i}_rad_s"] for i in range(1, 5)]
         # Disturbance force handles (magnitude lbf, unit direction).
         self.h_dist_ned = [node(f"external_reactions/dist_ned/{a}") for a in
                            ("magnitude", "x", "y", "z")]
         self.h_dist_frd = [node(f"external_reactions/dist_frd/{a}") for a in
                            ("magnitude", "x", "y", "z")]
 
-        # Home: where the CG rests on the legs below the start point (an air start
-        # is above home); local NED about it on the WGS-84 ellipsoid.
+    def _set_home(self, lat_deg: float, lon_deg: float, ground_alt_m: float) -> None:
+        """Home: where the CG rests on the legs below the start point (an air start is
+        above home); local NED about it on the WGS-84 ellipsoid."""
         lat0 = self.h_lat.get_double_value()
         self.home_lat_rad = lat0
         self.home_lon_rad = self.h_lon.get_double_value()
-        self.home_agl_m = rest_agl_m
+        self.home_agl_m = self.rest_agl_m
         s = math.sin(lat0)
         w = math.sqrt(1.0 - _WGS84_E2 * s * s)
         self.m_per_rad_lat = _WGS84_A_M * (1.0 - _WGS84_E2) / (w * w * w)  # meridian radius
@@ -164,6 +196,10 @@ class Fdm:
         self.home_lat_deg = lat_deg
         self.home_lon_deg = lon_deg
         self.ground_alt_m = ground_alt_m
+
+    def sample_getters(self) -> dict:
+        """{sample field name: bound getter} for the step kernel (bound once: ~33 ns a call)."""
+        return {name: n.get_double_value for name, n in self.sample_nodes.items()}
 
     # --- constants of the loaded model -------------------------------------------------
     def model_constant(self, path: str) -> float:

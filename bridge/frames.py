@@ -24,6 +24,15 @@ def quat_from_euler(phi: float, theta: float, psi: float) -> tuple[float, float,
             cr * cp * sy - sr * sp * cy)
 
 
+def euler_from_quat(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:
+    """Unit quaternion (w, x, y, z), body FRD -> NED -> ZYX Euler (roll, pitch, yaw) [rad],
+    yaw in [-pi, pi]: quat_from_euler's inverse."""
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return roll, pitch, yaw
+
+
 def ned_to_frd(phi: float, theta: float, psi: float, v_ned) -> tuple[float, float, float]:
     """Rotate a NED vector into body FRD: v_frd = R(phi) R(theta) R(psi) v_ned."""
     cph, sph = math.cos(phi), math.sin(phi)

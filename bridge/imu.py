@@ -185,7 +185,7 @@ class ImuModel:
     def next_scalar_block(self) -> tuple:
         """The next block for the one-sample-per-step path (the step kernel samples):
         (slow biases + white noise (rows, 6) gyro xyz then accel xyz, die temperature
-        (rows)). The maths of a sample are in bridge/step_python.py imu_scalar."""
+        (rows)). The maths of a sample: bridge/src/step_maths.c sb_imu_scalar."""
         temps = self._next_block()
         return np.ascontiguousarray(self._slow + self.white.next_block()), temps
 

@@ -3,7 +3,7 @@
 A lockstep frame with a foreign autopilot (ArduPilot SITL over JSON at 1 kHz, PX4 over HIL)
 is a round trip between two processes. A server that sleeps in select() until the reply
 comes pays a process wake-up per frame, which on the 2-core VM is tens of microseconds of a
-~140 us frame: `python -m silbridge.tools.autopilots.ardupilot_speed` measured SITL's frame
+~140 us frame: `python -m silbridge.tools.autopilots.ardupilot.speed` measured SITL's frame
 plus the link at 85 us per packet with a sleeping server and 34 us with a spinning one (the
 no-physics floor, 2026-11-25). Polling the socket without sleeping for a short budget first
 removes that wake-up, but only where the spinning server has a core of its own beside the

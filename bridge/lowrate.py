@@ -45,8 +45,8 @@ class Schedule:
 
 
 class Baro:
-    """Configuration, schedule and noise stream of the barometer. The step kernel
-    (bridge/step_python.py is its readable reference) runs the lag once per physics
+    """Configuration, schedule and noise stream of the barometer. The step kernel's
+    sensor stage (bridge/src/sensor_stage.c) runs the lag once per physics
     step, filtered_pa += alpha * (pressure_pa - filtered_pa), alpha = 1 - exp(-dt /
     lag_s), and samples pa = filtered + offset + noise_pa * n, put on the grid
     HIL_SENSOR (float32 hPa) carries exactly, so the FC reads the same pressure over

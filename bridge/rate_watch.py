@@ -6,7 +6,7 @@ a benchmark beside it) can fall short. Refusing to start then leaves the user wi
 where ArduCopter SITL would run, slower: so the run goes on, and the shortfall is said once
 when found, then at most every `report_every_s` of wall time while it lasts (never a line per
 window), and counted for the summary's "rates". `--strict-rates` keeps the refusal for the
-benchmarks that need exact rates (bridge/runner_main.py raises before this is consulted).
+benchmarks that need exact rates (bridge/bridge_driver.py raises before this is consulted).
 
 Rates are in sim-time Hz (samples per wall second / speed), the unit the check always used.
 """

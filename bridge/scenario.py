@@ -30,6 +30,7 @@ import numpy as np
 from silbridge.bridge import scenario_schema as S
 from silbridge.bridge.errors import ScenarioError
 from silbridge.magfield import field_at
+from silbridge.shm.records import NS_PER_S
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
@@ -384,7 +385,7 @@ class _Resolver:
         return val
 
     def check_consistency(self, sc: Scenario) -> None:
-        if 1_000_000_000 % sc.physics.rate_hz:
+        if NS_PER_S % sc.physics.rate_hz:
             self.fail("physics.rate_hz", f"{sc.physics.rate_hz} Hz gives a step that is not a whole "
                                          "number of nanoseconds; use e.g. 500, 1000, 2000, 4000")
         if sc.windows.transient_end_s < sc.windows.warmup_s:

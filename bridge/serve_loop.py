@@ -1,11 +1,12 @@
 """What the serve loops of the foreign-autopilot servers share: when a run ends, what it returns.
 
-A server for a foreign autopilot (ArduPilot's JSON physics, bridge/ardupilot_server.py; PX4's
-simulator link, bridge/px4_server.py) steps our physics for each message of the autopilot
-until the sim time reaches the run's duration, the vehicle crashes, or the caller's `stop()`
-says the run is over (the autopilot exited, its driver failed, the flight is done). Both
-loops ask the same two questions after each step and end with the same result, so
-`stopped_by` reads alike in every summary: "duration", "crash" or "stop".
+A server for a foreign autopilot (ArduPilot's JSON physics,
+bridge/autopilots/ardupilot/server.py; PX4's simulator link, bridge/autopilots/px4/server.py)
+steps our physics for each message of the autopilot until the sim time reaches the run's
+duration, the vehicle crashes, or the caller's `stop()` says the run is over (the autopilot
+exited, its driver failed, the flight is done). Both loops ask the same two questions after
+each step and end with the same result, so `stopped_by` reads alike in every summary:
+"duration", "crash" or "stop".
 """
 
 from __future__ import annotations

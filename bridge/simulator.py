@@ -18,9 +18,10 @@ Randomness: only from the scenario seed (named streams, see noise.py); the same
 scenario, seed and PWM sequence give identical record bytes.
 
 The hot path is one call into the C step kernel (bridge/src/stepmodule.c; its
-readable Python reference is bridge/step_python.py, selectable with
-kernel="python"): it sets the PWM, runs JSBSim, reads the state through the
-property nodes and writes the IMU, ground-truth, baro and mag records. Python keeps what
+readable Python oracle is tests/bridge/step_kernel_oracle.py, passed as kernel_cls by
+the tests): it sets the PWM, runs JSBSim, reads the FDM sample through the property
+nodes, and its sensor stage (bridge/src/sensor_stage.c) writes the IMU, ground-truth,
+baro and mag records. Python keeps what
 happens at 10 Hz or less or on events (GNSS, setpoints, crash messages, noise
 blocks) and the oversampled IMU block (numpy, imu.py).
 """
@@ -33,7 +34,6 @@ import numpy as np
 
 from silbridge.bridge import _step
 from silbridge.bridge import step_buffer as sb
-from silbridge.bridge import step_python as step_py
 from silbridge.bridge.disturbances import Disturbances
 from silbridge.bridge.errors import SimulatorError
 from silbridge.bridge.fdm import FT_M, LBF_N, PSF_PA, SLUG_KG, Fdm
@@ -44,18 +44,44 @@ from silbridge.bridge.noise import DEFAULT_BLOCK_ROWS
 from silbridge.bridge.scenario import draw_rng
 from silbridge.bridge.setpoints import SetpointProgram
 from silbridge.shm.records import Kind
+from silbridge.shm.records import NS_PER_S as _NS
 
-_NS = 1_000_000_000
 _FLIP_LIMIT_S = 1.0   # upside down this long in the air counts as a crash
 
 
 class Simulator:
+    """Parameters: ``imu_hz`` (None: the scenario's rate); ``block_rows`` rows per noise
+    block; ``kernel_cls`` the step kernel's class (the C one; tests pass the Python
+    oracle, tests/bridge/step_kernel_oracle.py, which has the same interface)."""
+
     def __init__(self, scenario, imu_hz: int | None = None, block_rows: int = DEFAULT_BLOCK_ROWS,
-                 kernel: str = "c"):
-        if kernel not in ("c", "python"):
-            raise SimulatorError(f"kernel must be 'c' or 'python', got {kernel!r}")
+                 kernel_cls=_step.Kernel):
         sc = scenario
         self.scenario = sc
+        self._set_rates(sc, imu_hz)
+        self.step_index = 0
+        self.sim_ns = 0
+        self.crashed = False
+        self.crash_reason = ""
+        self.events: list[tuple[int, str]] = []
+        home = sc.home
+        jsb_seed = int(draw_rng(sc.seed, "jsbsim").integers(1, 2**31 - 1))
+        self.fdm = Fdm(self.dt_s, home.lat_deg, home.lon_deg, home.alt_m, home.heading_deg,
+                       home.initial_agl_m, jsb_seed, sc.physics.model)
+        self._estimate_hover()
+        self._make_sensors(sc, block_rows)
+        self._plan_imu_sampling()
+        max_imu = -(-self.imu_hz // self.physics_hz) + 1
+        self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4)
+        self._seq = [0] * 9   # records published per kind; the header seq is this mod 2^32
+        self.kernel = self._make_kernel(kernel_cls)
+        self._attach_kernel()
+        self._views = self.buffer._views
+        self._prev6 = self._true6()
+        self._update_next_slow()
+
+    # --- construction, in order -----------------------------------------------------------
+    def _set_rates(self, sc, imu_hz: int | None) -> None:
         physics_hz = int(sc.physics.rate_hz)
         if _NS % physics_hz:
             raise SimulatorError(f"physics rate {physics_hz} Hz is not a whole number of ns per step")
@@ -66,19 +92,10 @@ class Simulator:
         self.imu_hz = imu_hz
         self.dt_ns = _NS // physics_hz
         self.dt_s = self.dt_ns / _NS
-        self.step_index = 0
-        self.sim_ns = 0
-        self.crashed = False
-        self.crash_reason = ""
-        self.events: list[tuple[int, str]] = []
-        seed = sc.seed
-        home = sc.home
-        jsb_seed = int(draw_rng(seed, "jsbsim").integers(1, 2**31 - 1))
-        fdm = Fdm(self.dt_s, home.lat_deg, home.lon_deg, home.alt_m, home.heading_deg,
-                  home.initial_agl_m, jsb_seed, sc.physics.model)
-        self.fdm = fdm
 
-        # Model constants and the open-loop hover estimate (motors.xml derivation).
+    def _estimate_hover(self) -> None:
+        """Model constants and the open-loop hover estimate (motors.xml derivation)."""
+        fdm = self.fdm
         kt = fdm.model_constant("quadx/kt-n-per-rad_s2")
         self.omega_max_rad_s = fdm.model_constant("quadx/omega-max-rad_s")
         expo = fdm.model_constant("quadx/thrust-expo")
@@ -89,79 +106,79 @@ class Simulator:
         throttle = ((expo - 1.0) + math.sqrt((1.0 - expo) ** 2 + 4.0 * expo * f)) / (2.0 * expo)
         self.hover_throttle = throttle
         self.hover_pwm_us = 1000.0 + 1000.0 * throttle
+        # specific force [m/s^2] = force [lbf] / mass [slug] * ft->m
+        self._lbf_to_m_s2 = FT_M / (fdm.mass_kg / SLUG_KG)
 
-        ambient_c = fdm.h_temp.get_double_value() / 1.8 - 273.15
-        self.imu = ImuModel(sc.imu, seed, physics_hz, imu_hz, ambient_c, self.omega_max_rad_s,
-                            block_rows)
+    def _make_sensors(self, sc, block_rows: int) -> None:
+        """Sensor models, disturbances, setpoints and the crash limits of the scenario."""
+        fdm, seed = self.fdm, sc.seed
+        self._ambient_c = fdm.h_temp.get_double_value() / 1.8 - 273.15
+        self.imu = ImuModel(sc.imu, seed, self.physics_hz, self.imu_hz, self._ambient_c,
+                            self.omega_max_rad_s, block_rows)
         self.baro = Baro(sc.baro, seed, self.dt_s, fdm.h_pressure.get_double_value() * PSF_PA)
         self.mag = Mag(sc.mag, seed)
         self.gnss = Gnss(sc.gnss, seed, fdm.m_per_rad_lat, fdm.m_per_rad_lon)
         self.dist = Disturbances(sc, fdm, self.imu, self.dt_ns, self._event)
-        self.setpoints = SetpointProgram(sc, self.dt_ns, math.radians(home.heading_deg))
+        self.setpoints = SetpointProgram(sc, self.dt_ns, math.radians(sc.home.heading_deg))
         # The scenario's current command (what the FC was told), for summaries.
         self.command = {"roll_rad": 0.0, "pitch_rad": 0.0, "alt_m": 0.0}
         self._crash_descent_m_s = sc.physics.crash_descent_m_s
         self._cos_crash_tilt = math.cos(math.radians(sc.physics.crash_tilt_deg))
-        self._flip_steps = int(_FLIP_LIMIT_S * physics_hz)
+        self._flip_steps = int(_FLIP_LIMIT_S * self.physics_hz)
         # Hubs are within 0.23 m of the CG: below that height a strike is possible.
         self._strike_check_agl_m = 0.25
 
-        # IMU sampling plan.
+    def _plan_imu_sampling(self) -> None:
+        """One IMU sample per step (the kernel writes it) or a block per step (imu.py)."""
+        imu_hz, physics_hz = self.imu_hz, self.physics_hz
         self._scalar_imu = imu_hz == physics_hz
         self._n_fixed = imu_hz // physics_hz if imu_hz % physics_hz == 0 else None
         if self._n_fixed:
             n = self._n_fixed
             self._offsets_ns = np.array([(j + 1) * self.dt_ns // n for j in range(n)], dtype=np.int64)
             self._frac_col = (self._offsets_ns / self.dt_ns)[:, None]
-        max_imu = -(-imu_hz // physics_hz) + 1
-        self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4)
-        self._seq = [0] * 9   # records published per kind; the header seq is this mod 2^32
 
-        # The per-step kernel (C; step_python.Kernel is its readable reference): it
-        # calls these bound methods of JSBSim's property nodes itself.
-        gd = lambda h: h.get_double_value  # noqa: E731
-        getters = [gd(h) for h in (fdm.h_p, fdm.h_q, fdm.h_r, fdm.h_fbx, fdm.h_fby, fdm.h_fbz,
-                                   fdm.h_phi, fdm.h_theta, fdm.h_psi, fdm.h_vn, fdm.h_ve,
-                                   fdm.h_vd, fdm.h_lat, fdm.h_lon, fdm.h_hagl, *fdm.h_omega,
-                                   fdm.h_gear, fdm.h_pressure)]
-        self._get_temp = gd(fdm.h_temp)
-        # specific force [m/s^2] = force [lbf] / mass [slug] * ft->m
-        self._lbf_to_m_s2 = FT_M / (fdm.mass_kg / SLUG_KG)
-        consts = {"lbf_to_m_s2": self._lbf_to_m_s2, "ft_m": FT_M, "psf_pa": PSF_PA,
-                  "lat0": fdm.home_lat_rad, "lon0": fdm.home_lon_rad,
-                  "m_lat": fdm.m_per_rad_lat, "m_lon": fdm.m_per_rad_lon,
-                  "agl0": fdm.home_agl_m, "dt_s": self.dt_s,
-                  "inv_omega_max2": self.imu.inv_omega_max2, "vib_a": self.imu.vib_a,
-                  "vib_g": self.imu.vib_g, "range_a": self.imu.range_a,
-                  "range_g": self.imu.range_g, "baro_alpha": self.baro.alpha,
-                  "cos_crash_tilt": self._cos_crash_tilt,
-                  "strike_agl": self._strike_check_agl_m}
-        self._state = np.zeros(step_py.ST_COUNT)
-        self._state[step_py.ST_BARO_PA] = self.baro.filtered_pa
-        self._state[step_py.ST_TEMP_C] = ambient_c
-        kernel_cls = _step.Kernel if kernel == "c" else step_py.Kernel
-        self.kernel = kernel_cls(
-            self.buffer.buf, [h.set_double_value for h in fdm.h_pwm], fdm.fdm.run, getters,
-            self._state, np.array([consts[n] for n in step_py.KERNEL_CONSTS]),
-            np.array(self.imu.phase), self.dt_ns, self._flip_steps, self._scalar_imu,
-            fdm.h_gear.get_double_value() > 0)
-        self.imu.kernel = self.kernel
-        self.kernel.set_injected(*self.imu.injected)
-        self.dist.attach_kernel(self.kernel)
-        bc, mc = sc.baro, sc.mag
-        self.kernel.configure_baro(bc.rate_hz, bc.offset_pa, bc.noise_pa, self._get_temp)
-        self.kernel.configure_mag(mc.rate_hz, tuple(mc.field_ned_gauss), tuple(mc.offset_gauss),
-                                  mc.noise_gauss)
-        self.kernel.set_baro_block(self.baro.noise.next_block())
-        self.kernel.set_mag_block(self.mag.noise.next_block())
+    def _stage_consts(self) -> dict:
+        """The sensor stage's constants by name (bridge/src/sensor_stage.h sb_stage_consts)."""
+        fdm, imu = self.fdm, self.imu
+        return {"lbf_to_m_s2": self._lbf_to_m_s2, "ft_m": FT_M, "psf_pa": PSF_PA,
+                "lat0_rad": fdm.home_lat_rad, "lon0_rad": fdm.home_lon_rad,
+                "m_per_rad_lat": fdm.m_per_rad_lat, "m_per_rad_lon": fdm.m_per_rad_lon,
+                "agl0_m": fdm.home_agl_m, "baro_alpha": self.baro.alpha,
+                "cos_crash_tilt": self._cos_crash_tilt,
+                "strike_agl_m": self._strike_check_agl_m, "dt_s": self.dt_s,
+                "inv_omega_max2": imu.inv_omega_max2, "vib_accel": imu.vib_a,
+                "vib_gyro": imu.vib_g, "range_accel": imu.range_a, "range_gyro": imu.range_g}
+
+    def _make_kernel(self, kernel_cls):
+        """The per-step kernel: it calls the bound methods of JSBSim's property nodes
+        itself and leaves the state Python reads in self._state (ST_* slots)."""
+        fdm = self.fdm
+        self._state = np.zeros(_step.ST_COUNT)
+        self._state[_step.ST_BARO_PA] = self.baro.filtered_pa
+        self._state[_step.ST_TEMP_C] = self._ambient_c
+        return kernel_cls(
+            self.buffer.buf, [h.set_double_value for h in fdm.h_pwm], fdm.fdm.run,
+            fdm.sample_getters(), self._state, self._stage_consts(), np.array(self.imu.phase),
+            self.dt_ns, self._flip_steps, self._scalar_imu, fdm.h_gear.get_double_value() > 0)
+
+    def _attach_kernel(self) -> None:
+        """Give the kernel its noise, bias, forces and low-rate sensors; bind the step."""
+        kernel = self.kernel
+        self.imu.kernel = kernel
+        kernel.set_injected(*self.imu.injected)
+        self.dist.attach_kernel(kernel)
+        bc, mc = self.scenario.baro, self.scenario.mag
+        kernel.configure_baro(bc.rate_hz, bc.offset_pa, bc.noise_pa)
+        kernel.configure_mag(mc.rate_hz, tuple(mc.field_ned_gauss), tuple(mc.offset_gauss),
+                             mc.noise_gauss)
+        kernel.set_baro_block(self.baro.noise.next_block())
+        kernel.set_mag_block(self.mag.noise.next_block())
         if self._scalar_imu:
-            self.kernel.set_block(*self.imu.next_scalar_block())
-            self._kstep = self.kernel.step
+            kernel.set_block(*self.imu.next_scalar_block())
+            self._kstep = kernel.step
         else:
-            self._kstep_gt = self.kernel.step_gt
-        self._views = self.buffer._views
-        self._prev6 = self._true6()
-        self._update_next_slow()
+            self._kstep_gt = kernel.step_gt
 
     # --- helpers --------------------------------------------------------------------
     def _true6(self) -> tuple:
@@ -212,26 +229,26 @@ class Simulator:
     def _after_step(self, flags: int, count: int) -> int:
         """What the kernel flagged: noise refill, ground contact, crashes, 100 Hz sensors."""
         st = self._state
-        if flags & step_py.F_BLOCK_DONE:
+        if flags & _step.F_BLOCK_DONE:
             self.kernel.set_block(*self.imu.next_scalar_block())
-        if flags & step_py.F_BARO_BLOCK_DONE:
+        if flags & _step.F_BARO_BLOCK_DONE:
             self.kernel.set_baro_block(self.baro.noise.next_block())
-        if flags & step_py.F_MAG_BLOCK_DONE:
+        if flags & _step.F_MAG_BLOCK_DONE:
             self.kernel.set_mag_block(self.mag.noise.next_block())
-        if flags & step_py.F_GROUND_CHANGED:
-            on_ground = st[step_py.ST_ON_GROUND] > 0.0
+        if flags & _step.F_GROUND_CHANGED:
+            on_ground = st[_step.ST_ON_GROUND] > 0.0
             self.fdm.set_air_integrator(not on_ground)
-            prev_vd = float(st[step_py.ST_PREV_VD])
+            prev_vd = float(st[_step.ST_PREV_VD])
             if on_ground and prev_vd > self._crash_descent_m_s:
                 self._crash(f"hard touchdown at {prev_vd:.2f} m/s descent")
-        if flags & step_py.F_TIPPED:
-            cos_tilt = max(-1.0, float(st[step_py.ST_COS_TILT]))
+        if flags & _step.F_TIPPED:
+            cos_tilt = max(-1.0, float(st[_step.ST_COS_TILT]))
             self._crash(f"tipped over on the ground ({math.degrees(math.acos(cos_tilt)):.0f} deg)")
-        if flags & step_py.F_FLIPPED:
+        if flags & _step.F_FLIPPED:
             self._crash("flipped: upside down for 1 s")
-        if flags & step_py.F_ROTOR_STRIKE:
+        if flags & _step.F_ROTOR_STRIKE:
             self._crash("rotor strike: a rotor hub touched the ground")
-        if flags & step_py.F_SLOW_DUE:
+        if flags & _step.F_SLOW_DUE:
             count = self._slow_sensors(count)
             self.buffer.finish(count)
         return count
@@ -245,8 +262,8 @@ class Simulator:
         gnss = self.gnss
         if sim_ns >= gnss.schedule.next_ns:
             gnss.schedule.advance()
-            lat, lon, hagl_m = st[step_py.ST_LAT:step_py.ST_HAGL + 1].tolist()
-            vel = tuple(st[step_py.ST_VEL:step_py.ST_VEL + 3].tolist())
+            lat, lon, hagl_m = st[_step.ST_LAT:_step.ST_HAGL + 1].tolist()
+            vel = tuple(st[_step.ST_VEL:_step.ST_VEL + 3].tolist())
             gnss.epoch(sim_ns, lat, lon, self.fdm.ground_alt_m + hagl_m, vel)
         pending = gnss.pending
         while pending and pending[0][0] <= sim_ns:
@@ -299,7 +316,7 @@ class Simulator:
         if n:
             buf.write_imu_headers(n, self._seq[1] & 0xFFFFFFFF, times)
             self._seq[1] += n
-        o1, o2, o3, o4 = st[step_py.ST_OMEGA:step_py.ST_OMEGA + 4]
+        o1, o2, o3, o4 = st[_step.ST_OMEGA:_step.ST_OMEGA + 4]
         self.imu.step_block(self._prev6, cur6, frac_col, o1, o2, o3, o4, buf.imu_payload(n))
         self._prev6 = cur6
 
@@ -347,7 +364,7 @@ class Simulator:
             "pressure_pa": gd(fdm.h_pressure) * PSF_PA,
             "imu_bias_gyro_frd_rad_s": tuple(self.imu.bias6()[:3]),
             "imu_bias_accel_frd_m_s2": tuple(self.imu.bias6()[3:]),
-            "imu_temp_c": (float(self._state[step_py.ST_TEMP_C]) if self._scalar_imu
+            "imu_temp_c": (float(self._state[_step.ST_TEMP_C]) if self._scalar_imu
                            else self.imu.temp_c),
             "crashed": self.crashed,
         }
@@ -356,8 +373,8 @@ class Simulator:
         """True roll, pitch [rad] and height above home [m] after the last step (cheap:
         the kernel's state, for per-step summaries; truth() has everything)."""
         st = self._state
-        return (float(st[step_py.ST_EULER]), float(st[step_py.ST_EULER + 1]),
-                float(st[step_py.ST_HAGL]) - self.fdm.home_agl_m)
+        return (float(st[_step.ST_EULER]), float(st[_step.ST_EULER + 1]),
+                float(st[_step.ST_HAGL]) - self.fdm.home_agl_m)
 
     def thrust_n(self) -> tuple:
         """Current rotor thrusts [N], motors 1..4."""

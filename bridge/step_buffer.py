@@ -4,10 +4,12 @@ Records use the shm contract (silbridge.shm.records): 64-byte slots, header
 {kind, flags, seq, sim_ns, wall_ns}. The buffer is a bytearray with numpy views
 over it: the C step kernel (bridge/src/stepmodule.c) writes the IMU and
 ground-truth records in place, `Struct.pack_into` the low-rate ones and the
-Python reference kernel's, and the oversampled IMU block is written through uint32/float32/int64 views in
-four vectorised assignments. wall_ns stays 0 (the ring stamps it).
+Python reference kernel's, and the oversampled IMU block is written through
+uint32/float32/int64 views in four vectorised assignments. wall_ns stays 0 (the
+ring stamps it). Every format and word index here is derived from the dtypes of
+shm/records.py, so the slot layout is spelled out there only.
 
-`records(count)` returns a RECORD_DTYPE view of the first `count` slots: it is
+`finish(count)` returns a RECORD_DTYPE view of the first `count` slots: it is
 valid until the next step overwrites the buffer; copy it to keep it.
 """
 
@@ -17,28 +19,28 @@ import struct
 
 import numpy as np
 
-from silbridge.shm.records import FLAG_STEP_END, RECORD_DTYPE, RECORD_SIZE, Kind
+from silbridge.shm.records import (FLAG_STEP_END, FLAGS_OFFSET, RECORD_DTYPE, RECORD_SIZE, Kind,
+                                   record_format, record_struct, word_index)
 
-HEADER = "HHIqq"
-IMU_FMT = HEADER + "3f3ffIII"
-GT_ATT_FMT = HEADER + "4f3f3f"
-GT_NAV_FMT = HEADER + "3d3fB3x"
-BARO_FMT = HEADER + "ff32x"
-MAG_FMT = HEADER + "3f28x"
-GNSS_FMT = HEADER + "iii3fHHBB10x"
-SETPOINT_FMT = HEADER + "4fI20x"
+# Whole-slot writers, derived from shm/records.py's dtypes (tests/shm/test_layout.py checks
+# them against the C structs). GT writes the two ground-truth slots in one call.
+IMU = record_struct(Kind.IMU)
+GT = struct.Struct("<" + record_format(Kind.GT_ATT) + record_format(Kind.GT_NAV))
+BARO = record_struct(Kind.BARO)
+MAG = record_struct(Kind.MAG)
+GNSS = record_struct(Kind.GNSS)
+SETPOINT = record_struct(Kind.SETPOINT)
 
-IMU = struct.Struct("<" + IMU_FMT)
-GT = struct.Struct("<" + GT_ATT_FMT + GT_NAV_FMT)
-BARO = struct.Struct("<" + BARO_FMT)
-MAG = struct.Struct("<" + MAG_FMT)
-GNSS = struct.Struct("<" + GNSS_FMT)
-SETPOINT = struct.Struct("<" + SETPOINT_FMT)
-
-for _s, _n in ((IMU, 1), (GT, 2), (BARO, 1), (MAG, 1), (GNSS, 1), (SETPOINT, 1)):
-    assert _s.size == _n * RECORD_SIZE, (_s.format, _s.size)
-
-_FLAGS_OFFSET = 2  # byte offset of the u16 flags in a slot; STEP_END is its low bit
+# Word columns of the IMU block's vectorised writes, in the u32/f32 (4-byte) and i64 rows.
+_W32 = RECORD_SIZE // 4
+_W64 = RECORD_SIZE // 8
+_KIND_W = word_index(Kind.IMU, "kind", 4)                 # kind | flags << 16
+_SEQ_W = word_index(Kind.IMU, "seq", 4)
+_SIM_NS_W = word_index(Kind.IMU, "sim_ns", 8)
+_SAMPLE_INDEX_W = word_index(Kind.IMU, "sample_index", 4)
+_SAMPLES_PER_STEP_W = word_index(Kind.IMU, "samples_per_step", 4)
+_PAYLOAD_W = word_index(Kind.IMU, "accel_frd_m_s2", 4)    # accel xyz, gyro xyz, temperature
+_PAYLOAD_END_W = word_index(Kind.IMU, "temperature_c", 4) + 1
 
 
 class StepBuffer:
@@ -46,36 +48,38 @@ class StepBuffer:
         self.capacity = capacity
         self.buf = bytearray(capacity * RECORD_SIZE)
         self.generic = np.frombuffer(self.buf, dtype=RECORD_DTYPE)
-        self.u32 = np.frombuffer(self.buf, dtype="<u4").reshape(capacity, 16)
-        self.f32 = np.frombuffer(self.buf, dtype="<f4").reshape(capacity, 16)
-        self.i64 = np.frombuffer(self.buf, dtype="<i8").reshape(capacity, 8)
+        self.u32 = np.frombuffer(self.buf, dtype="<u4").reshape(capacity, _W32)
+        self.f32 = np.frombuffer(self.buf, dtype="<f4").reshape(capacity, _W32)
+        self.i64 = np.frombuffer(self.buf, dtype="<i8").reshape(capacity, _W64)
         self._views = [self.generic[:i] for i in range(capacity + 1)]
+        self._seq = self.u32[:, _SEQ_W]           # one column per slot: [:n] is a cheap slice
+        self._sim_ns = self.i64[:, _SIM_NS_W]
         self._imu_templates: dict[int, np.ndarray] = {}
         self._aranges: dict[int, np.ndarray] = {}
         self._payload_views: dict[int, np.ndarray] = {}
 
     def finish(self, count: int) -> np.ndarray:
         """Mark the last record STEP_END and return the step's records."""
-        self.buf[(count - 1) * RECORD_SIZE + _FLAGS_OFFSET] = FLAG_STEP_END
+        self.buf[(count - 1) * RECORD_SIZE + FLAGS_OFFSET] = FLAG_STEP_END  # low byte
         return self._views[count]
 
     def write_imu_headers(self, n: int, seq0: int, times_ns: np.ndarray) -> None:
         """Headers and index fields of n IMU records in slots 0..n-1 (payload: imu_payload)."""
         tpl = self._imu_templates.get(n)
         if tpl is None:
-            tpl = np.zeros((n, 16), dtype="<u4")
-            tpl[:, 0] = int(Kind.IMU)          # kind | flags << 16 (flags 0)
-            tpl[:, 13] = np.arange(n)          # sample_index
-            tpl[:, 14] = n                     # samples_per_step
+            tpl = np.zeros((n, _W32), dtype="<u4")
+            tpl[:, _KIND_W] = int(Kind.IMU)    # flags 0
+            tpl[:, _SAMPLE_INDEX_W] = np.arange(n)
+            tpl[:, _SAMPLES_PER_STEP_W] = n
             self._imu_templates[n] = tpl
             self._aranges[n] = np.arange(n, dtype=np.int64)
         self.u32[:n] = tpl
-        self.u32[:n, 1] = (self._aranges[n] + seq0) & 0xFFFFFFFF
-        self.i64[:n, 1] = times_ns
+        self._seq[:n] = (self._aranges[n] + seq0) & 0xFFFFFFFF
+        self._sim_ns[:n] = times_ns
 
     def imu_payload(self, n: int) -> np.ndarray:
         """(n, 7) float32 view: accel xyz, gyro xyz, temperature of IMU slots 0..n-1."""
         v = self._payload_views.get(n)
         if v is None:
-            v = self._payload_views[n] = self.f32[:n, 6:13]
+            v = self._payload_views[n] = self.f32[:n, _PAYLOAD_W:_PAYLOAD_END_W]
         return v

@@ -11,8 +11,7 @@ ground calibration), and arming earlier leaves a bias that tilts the hover.
 from __future__ import annotations
 
 from .autodec import AutoDeclination
-
-_NS = 1_000_000_000
+from silbridge.shm.records import NS_PER_S as _NS
 
 
 class AutoFlight:

@@ -30,6 +30,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.mavlink.gcs.geo_store import FENCE_CIRCLE
 from silbridge.mavlink.gcs.vehicle_api import CopterMode
+from silbridge.shm.records import NS_PER_S as _NS
 
 ALT_MAX, CIRCLE, POLYGON, ALT_MIN = 1, 2, 4, 8
 BACKUP_M = 20.0                 # AC_FENCE_*_BACKUP_DISTANCE (copter)
@@ -38,7 +39,6 @@ RECOVERY_S = 10.0               # AC_FENCE_MANUAL_RECOVERY_TIME_MIN
 CLEAR_M = 1.0                   # ours: a breach clears 1 m inside (no flapping on estimate noise)
 NAMES = ((ALT_MAX, "Max Alt"), (ALT_MIN, "Min Alt"), (CIRCLE, "Circle"), (POLYGON, "Polygon"))
 NOTICE, INFO = mav.MAV_SEVERITY_NOTICE, mav.MAV_SEVERITY_INFO
-_NS = 1_000_000_000
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,8 @@ consistent group of changes (several parameters at once) must serialise them.
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from . import params as P
@@ -174,6 +176,37 @@ class FlightCore:
             raise InputError("pwm_out must be PWM_DTYPE and status_out STATUS_DTYPE")
         k = self._c.step_batch(recs, pwm_out, status_out)
         return pwm_out[:k], status_out[:k]
+
+    # ---- the FC loop's surface (fc_sil/fc_loop.py) --------------------------
+
+    def bind_batch(self, records: np.ndarray, pwm_out: np.ndarray,
+                   status_out: np.ndarray) -> Callable[[int], int]:
+        """Bind the loop's record, PWM and status arrays once; returns step(n) -> PWM
+        records written: step_batch over the first n bound records, nothing parsed or
+        allocated per call (the C method itself, so a poll pays no Python frame here)."""
+        self._c.bind_batch(records, pwm_out, status_out)
+        return self._c.step_bound
+
+    def attach_router(self, capsule, *, fc_sim_word: int, latency_ns: np.ndarray,
+                      period_ns: np.ndarray, e2e_ns: np.ndarray,
+                      words: np.ndarray) -> Callable[[], int] | None:
+        """Hand the segment (FcTransport.c_capsule()) to the C record router
+        (fc_sil/ext/record_router.c); returns poll() -> records consumed, which pops, steps
+        over the bound arrays (bind_batch first), pushes, acknowledges fc_sim_word and keeps
+        the loop's statistics rings and counters. A core that must see records in Python
+        returns None and the loop polls in Python."""
+        self._c.attach_io(capsule, fc_sim_word=fc_sim_word, latency_ns=latency_ns,
+                          period_ns=period_ns, e2e_ns=e2e_ns, words=words)
+        return self._c.poll_io
+
+    def detach_router(self) -> None:
+        """Let go of the segment (before it closes); the router's poll then raises."""
+        self._c.attach_io(None)
+
+    def bind_log(self, queues, **targets) -> None:
+        """Have the C core append what it consumes to a log's queues (Core.bind_log,
+        fc_sil/ext/core_log.c; tools/loop/run_log.py capture_fc); bind_log(None) stops."""
+        self._c.bind_log(queues, **targets)
 
     def pwm_bound(self, records: np.ndarray) -> int:
         """Most PWM ticks step_batch(records) can emit (to size preallocated outputs)."""

@@ -26,10 +26,10 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from .nav_circle import CircleNav
 from .nav_spline import SplineLeg, SplineNav
+from silbridge.shm.records import NS_PER_S as _NS
 
 CIRCLE_EDGE_MIN_M = 3.0           # ArduCopter flies to the circle's edge when farther
 CIRCLE_FACE_EDGE_MIN_M = 5.0      # and faces it on the way when this far from the centre
-_NS = 1_000_000_000
 
 
 @dataclass

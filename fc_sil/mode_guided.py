@@ -34,8 +34,8 @@ from .auto_yaw import (NO_YAW, AutoYaw, HeadingControl, YawConfig, YawMode, YawR
                        wrap_pi)
 from .modes import Mode
 from .nav_kinematics import advance_xy, shape_pos_vel_accel_xy
+from silbridge.shm.records import NS_PER_S as _NS
 
-_NS = 1_000_000_000
 # GUID_OPTIONS bits (ArduCopter ModeGuided::Option)
 OPT_IGNORE_PILOT_YAW = 1 << 2
 OPT_THRUST_AS_THRUST = 1 << 3

@@ -11,8 +11,7 @@ run are split into batches: in lockstep the same flight, the same trace.
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-_NS = 1_000_000_000
+from silbridge.shm.records import NS_PER_S as _NS
 
 
 @dataclass(frozen=True)

@@ -176,6 +176,17 @@ def feature_param(feature: str) -> str:
     raise ParamError(f"unknown feature {feature!r}; known: {', '.join(FEATURES)}")
 
 
+def feature_params(features_off) -> dict[str, int]:
+    """Parameter overrides that switch the named features off (`--feature-off`, the ablation's
+    variants): short names only, as the CLI offers them."""
+    out = {}
+    for f in features_off:
+        if f not in FEATURES:
+            raise ParamError(f"unknown feature {f!r}; choose from {', '.join(FEATURES)}")
+        out[FEATURES[f]] = 0
+    return out
+
+
 def defaults() -> dict[str, float]:
     """name -> default for every declared parameter, in index order."""
     return {p.name: p.default for p in PARAMS}

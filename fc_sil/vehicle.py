@@ -53,9 +53,9 @@ from .rc_input import ModeSwitch, RcConfig
 from .snapshot import build_snapshot
 from .vehicle_commands import GcsCommands
 from .vehicle_nav import NavHelpers
+from silbridge.shm.records import NS_PER_S as _NS
 
 log = logging.getLogger(__name__)
-_NS = 1_000_000_000
 # home altitude: GNSS altitude averaged while disarmed (one fix is +-3 m; this EMA settles it)
 HOME_ALT_TC_S = 5.0
 

@@ -15,6 +15,17 @@ The field layout, id and CRC_EXTRA come from the dialect's message class, never 
 
 Signed links are not handled here (nothing in silbridge signs its HIL link): `pack` refuses a
 codec that signs, and `check` leaves frames of a codec with a key to the codec.
+
+Why production keeps both this and pymavlink, and which is which: pymavlink is the dialect
+(every message class, whose layout, id and CRC_EXTRA this module reads rather than retypes)
+and the codec of every other message and of every frame this path does not vouch for (bad
+CRC, flags, signing: mavlink/framing.py hands those to it, so they are counted as before).
+This module is only the per-step fast path of the HIL links: HIL_SENSOR, HIL_GPS and
+HIL_STATE_QUATERNION packed by `SensorEncoder` (mavlink/hil/hil_codec.py: our HIL link's and
+PX4's sensor frames), HIL_ACTUATOR_CONTROLS checked as it arrives from PX4
+(`HilLink.shortcut`, mavlink/hil/hil_link.py). The package keeps no slow copy of this path:
+its oracle is pymavlink's own `msg.pack(codec)` and `codec.decode`, in
+tests/mavlink/test_v2_frames.py.
 """
 
 from __future__ import annotations
@@ -23,9 +34,10 @@ import struct
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-MAGIC_V2 = 0xFD
-HEADER_V2 = 10
+from silbridge.mavlink.framing import HEADER_V2, MAGIC_V2
+
 _HEADER = struct.Struct("<BBBBBBBHB")   # magic, len, incompat, compat, seq, sys, comp, id
+assert _HEADER.size == HEADER_V2
 _CRC = struct.Struct("<H")
 try:                                    # CRC-16/MCRF4XX (X.25 without the final xor)
     from fastcrc.crc16 import mcrf4xx as _mcrf4xx

@@ -1,22 +1,22 @@
 """Struct readers of the record payloads, for hot paths that read a step's bytes directly.
 
-A foreign autopilot's link (bridge/ardupilot_physics.py for ArduPilot's JSON reply,
-mavlink/hil/px4_hil.py for PX4's HIL frames) reads a few fields of each record of a physics
-step, thousands of times a second. `struct.unpack_from` on the step's bytes costs a few us
-where numpy field views cost tens, so they read through these. Each skips the 24-byte header
-(shm/include/sb_records.h) and reads the payload's leading fields in declaration order;
-tests/mavlink/test_px4_frames.py checks every one against the dtypes of shm/records.py.
+A foreign autopilot's link (bridge/autopilots/px4/hil_messages.py for PX4's HIL frames; the
+JSON reply's Python oracle, tests/bridge/json_reply_oracle.py) reads a few fields of each
+record of a physics step, thousands of times a second. `struct.unpack_from` on the step's
+bytes costs a few us where numpy field views cost tens, so they read through these. Each reads the named fields
+from the slot start (header skipped as padding), derived from the dtypes of shm/records.py
+by `record_struct`; tests/shm/test_layout.py checks every one against the C structs.
 """
 
 from __future__ import annotations
 
-import struct
+from silbridge.shm.records import Kind, record_struct
 
-KIND = struct.Struct("<H")                  # the header's record kind
-IMU = struct.Struct("<24x6f")               # accel_frd_m_s2[3], gyro_frd_rad_s[3]
-BARO = struct.Struct("<24x2f")              # pressure_pa, temperature_c
-MAG = struct.Struct("<24x3f")               # field_frd_gauss[3]
-GNSS = struct.Struct("<24x3i3f2H2B")        # lat_e7, lon_e7, alt_mm, vel_ned_m_s[3], eph_cm,
-                                            # epv_cm, fix_type, satellites
-GT_ATT = struct.Struct("<24x10f")           # q_wxyz[4], rates_frd_rad_s[3], specific_force[3]
-GT_NAV = struct.Struct("<24x3d3f")          # pos_ned_m[3], vel_ned_m_s[3]
+KIND = record_struct(Kind.NONE, ["kind"])      # the header's record kind, any kind
+IMU = record_struct(Kind.IMU, ["accel_frd_m_s2", "gyro_frd_rad_s"])
+BARO = record_struct(Kind.BARO, ["pressure_pa", "temperature_c"])
+MAG = record_struct(Kind.MAG, ["field_frd_gauss"])
+GNSS = record_struct(Kind.GNSS, ["lat_e7", "lon_e7", "alt_mm", "vel_ned_m_s", "eph_cm",
+                                 "epv_cm", "fix_type", "satellites"])
+GT_ATT = record_struct(Kind.GT_ATT, ["q_wxyz", "rates_frd_rad_s", "specific_force_frd_m_s2"])
+GT_NAV = record_struct(Kind.GT_NAV, ["pos_ned_m", "vel_ned_m_s"])

@@ -7,7 +7,9 @@ to peer, ``actuators``: peer to owner), one heartbeat counter per side,
 eight lockstep words (see shm/lockstep.py) and the per-ring counters.
 
 Everything per record is in C (silbridge.shm._ring); this file adds the
-class methods, the attach timeout and the context manager.
+class methods, the attach timeout and the context manager. The peer's side is the
+FC loop's shared-memory transport (fc_sil/fc_transport.py FcTransport): `c_capsule()`
+hands the mapping to the FC's C record router.
 """
 
 from __future__ import annotations

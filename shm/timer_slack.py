@@ -1,7 +1,7 @@
 """Timer slack: how late the kernel may wake a sleeping thread, to batch wake-ups.
 
 Linux defaults to 50 us per thread. A real-time loop that sleeps most of each period and
-spins the rest (bridge/pacing.py) or waits on its ring (fc_sil/runtime.py) wants exact
+spins the rest (bridge/pacing.py) or waits on its ring (fc_sil/fc_loop.py) wants exact
 wake-ups: with 1 ns, a 0.5 ms sleep on the 2-core VM overshot by p50 49 us / p99 105 us
 instead of 93 / 151 us (measured 2026-11-22, python -c "time.sleep(0.0005)" x 3000).
 Only the calling thread changes; elsewhere (not Linux) this does nothing.

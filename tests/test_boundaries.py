@@ -6,9 +6,10 @@ messages, not physics or controllers; nothing below the command line imports `to
 benchmark toolkit and the command line); the portable C core includes only its own headers
 and the C standard library, so it compiles on a flight controller as it is. Inside the core,
 estimation and control meet only in the vehicle state (`fc_vehicle_state.h`): the control law
-reads no estimator and no ground truth directly. The per-block C bindings (`_blocks`, wrapped
-by `fc_sil/blocks.py`) are for tests only: no program imports them and the flight's `_core`
-carries none of them.
+reads no estimator and no ground truth directly, and neither it nor the bridge's sensor stage
+(`bridge/src/sensor_stage.c`) reaches Python or the FC core object: both stand alone. The per-block C bindings (generated with
+cffi from the core's headers by tests/fc_sil/core_cffi.py, wrapped by fc_blocks.py) are for
+tests only: no program imports them or cffi, a test extra the light install lacks.
 """
 
 from __future__ import annotations
@@ -109,55 +110,85 @@ def test_the_checker_sees_a_crossing(tmp_path):
     assert _imported_parts(f, "bridge") == {"fc_sil", "tools"}
 
 
-BLOCK_BINDINGS = {"blocks", "_blocks"}   # fc_sil/blocks.py and the extension it wraps
+# The block bindings' build and wrappers (tests/fc_sil) and what they need: the test extra.
+TEST_ONLY = {"cffi", "pycparser", "core_cffi", "fc_blocks", "cdef_from_headers"}
 
 
-def _imports_block_bindings(path: Path) -> bool:
-    """Whether a file imports fc_sil.blocks or fc_sil._blocks, in any import form."""
+def _test_only_imports(path: Path) -> set[str]:
+    """The test-only modules a file imports, in any absolute import form."""
     tree = ast.parse(path.read_text(), filename=str(path))
-    in_fc_sil = path.parent.name == "fc_sil"
+    found = set()
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            mods = [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level == 1 and in_fc_sil:      # from . import blocks / from .blocks import
-                base = f"silbridge.fc_sil.{base}".rstrip(".")
-            elif node.level >= 2:                  # from ..fc_sil import blocks
-                base = f"silbridge.{base}"
-            mods = [base] + [f"{base}.{a.name}" for a in node.names]
-        else:
-            continue
-        if any(m.split(".")[:2] == ["silbridge", "fc_sil"] and len(m.split(".")) > 2
-               and m.split(".")[2] in BLOCK_BINDINGS for m in mods):
-            return True
-    return False
+            found |= {a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            found.add(node.module.split(".")[0])
+    return found & TEST_ONLY
 
 
 def test_only_tests_use_the_block_bindings():
     bad = []
     for part in PARTS:
         for path in sorted((ROOT / part).rglob("*.py")):
-            if path != ROOT / "fc_sil" / "blocks.py" and _imports_block_bindings(path):
-                bad.append(str(path.relative_to(ROOT)))
+            if found := _test_only_imports(path):
+                bad.append(f"{path.relative_to(ROOT)}: {sorted(found)}")
     assert not bad, "test-only block bindings imported by:\n" + "\n".join(bad)
 
 
-def test_the_flight_core_module_carries_no_block_binding():
-    from silbridge.fc_sil import _blocks, _core
-    shared = {n for n in dir(_blocks) if not n.startswith("__")} & set(dir(_core))
-    assert not shared, f"_core exports block bindings: {sorted(shared)}"
-
-
 def test_the_block_binding_check_sees_an_import(tmp_path):
-    pkg = tmp_path / "fc_sil"
-    pkg.mkdir()
-    for i, text in enumerate(("from . import _blocks\n", "from .blocks import Mixer\n",
-                              "from silbridge.fc_sil import blocks\n",
-                              "import silbridge.fc_sil._blocks\n")):
-        f = pkg / f"m{i}.py"
+    for i, text in enumerate(("import cffi\n", "from cffi import FFI\n",
+                              "from fc_blocks import Mixer\n", "import core_cffi as c\n")):
+        f = tmp_path / f"m{i}.py"
         f.write_text(text)
-        assert _imports_block_bindings(f), text
-    ok = pkg / "ok.py"
+        assert _test_only_imports(f), text
+    ok = tmp_path / "ok.py"
     ok.write_text("from . import _core\nfrom silbridge.fc_sil.params import BY_NAME\n")
-    assert not _imports_block_bindings(ok)
+    assert not _test_only_imports(ok)
+
+
+def _include_closure(path: Path, dirs: tuple[Path, ...]) -> set[str]:
+    """Every header a C file reaches, through the project headers it includes (by name)."""
+    seen: set[str] = set()
+    todo = [path]
+    while todo:
+        text = todo.pop().read_text()
+        for m in re.finditer(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', text, re.M):
+            name = m.group(1)
+            if name in seen:
+                continue
+            seen.add(name)
+            todo += [d / name for d in dirs if (d / name).is_file()][:1]
+    return seen
+
+
+# What the two pure-C blocks that sit where the languages meet may reach: the sensor stage
+# (an FDM sample in, records out) and the control law (vehicle state in, mixer inputs out).
+# Neither may see Python, the FC core object, parameters, or the shared-memory transport: the
+# CPython shim and fc_core own those, as PX4's module owns RateControl's topics.
+PURE_BLOCKS = {
+    "sensor stage": (ROOT / "bridge" / "src" / "sensor_stage.c",
+                     (ROOT / "bridge" / "src", ROOT / "shm" / "include"),
+                     {"sensor_stage.h", "sb_records.h", "step_maths.h"}),
+    "control law": (ROOT / "fc_sil" / "core" / "fc_control.c", (ROOT / "fc_sil" / "core",),
+                    None),
+}
+CORE_OBJECT_HEADERS = {"fc_core.h", "fc_params.h", "fc_config_map.h",
+                       "fc_sched.h", "fc_core_inputs.h"}
+
+
+@pytest.mark.parametrize("block", sorted(PURE_BLOCKS))
+def test_pure_c_blocks_include_no_python_and_no_core(block):
+    src, dirs, only_own = PURE_BLOCKS[block]
+    reached = _include_closure(src, dirs)
+    project = {h for h in reached if h not in C_STANDARD_HEADERS}
+    assert "Python.h" not in reached, f"the {block} includes Python.h"
+    assert not project & CORE_OBJECT_HEADERS, f"the {block} includes {project & CORE_OBJECT_HEADERS}"
+    if only_own is not None:
+        assert project <= only_own, f"the {block} reaches {sorted(project - only_own)}"
+    assert src.with_suffix(".h").name in reached    # the scan is not vacuous
+
+
+def test_the_include_scan_follows_headers(tmp_path):
+    (tmp_path / "a.c").write_text('#include "b.h"\n#include <math.h>\n')
+    (tmp_path / "b.h").write_text('#include "fc_core.h"\n')
+    assert _include_closure(tmp_path / "a.c", (tmp_path,)) == {"b.h", "math.h", "fc_core.h"}

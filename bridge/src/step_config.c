@@ -1,22 +1,11 @@
 /*
- * step_config.c - the Kernel methods used between steps (step_run.c has the
- * step itself): the IMU noise block and injected gyro bias, the baro and
- * magnetometer configuration and noise, the disturbance forces, counters and
- * the attributes Python reads or sets (next_slow_ns, pos).
+ * step_config.c - the Kernel methods used between steps (step_run.c has the step
+ * itself, step_forces.c the disturbance forces): the IMU noise block and injected gyro
+ * bias, the baro and magnetometer configuration and noise, counters and the attributes
+ * Python reads or sets (next_slow_ns, pos). The sensor stage reads the noise through
+ * pointers into the Py_buffer views held here.
  */
 #include "step_kernel.h"
-
-void sb_step_clear_forces(Kernel *self)
-{
-    for (int f = 0; f < self->n_force_frames; f++) {
-        for (int i = 0; i < 3; i++)
-            Py_CLEAR(self->forces[f].set[i]);
-        PyMem_Free(self->forces[f].items);
-        self->forces[f].items = NULL;
-        self->forces[f].n = 0;
-    }
-    self->n_force_frames = 0;
-}
 
 PyObject *Kernel_set_block(Kernel *self, PyObject *args)
 {
@@ -36,9 +25,8 @@ PyObject *Kernel_set_block(Kernel *self, PyObject *args)
     sb_step_release(&self->temps_view);
     self->block_view = bv;
     self->temps_view = tv;
-    self->rows = bv.shape[0];
-    self->pos = 0;
-    self->have_block = 1;
+    sb_sensor_stage_set_imu_noise(&self->stage, (const double *)bv.buf,
+                                  (const double *)tv.buf, (size_t)bv.shape[0]);
     Py_RETURN_NONE;
 }
 
@@ -52,19 +40,22 @@ PyObject *Kernel_set_injected(Kernel *self, PyObject *const *args, Py_ssize_t na
         double v = PyFloat_AsDouble(args[i]);
         if (v == -1.0 && PyErr_Occurred())
             return NULL;
-        self->injected[i] = v;
+        self->stage.injected_rad_s[i] = v;
     }
     Py_RETURN_NONE;
 }
 
 PyObject *Kernel_seqs(Kernel *self, PyObject *Py_UNUSED(ignored))
 {
-    return Py_BuildValue("(kkkkk)", (unsigned long)self->seq_imu, (unsigned long)self->seq_att,
-                         (unsigned long)self->seq_nav, (unsigned long)self->baro.seq,
-                         (unsigned long)self->mag.seq);
+    const sb_sensor_stage *s = &self->stage;
+    return Py_BuildValue("(kkkkk)", (unsigned long)s->seq_imu, (unsigned long)s->seq_att,
+                         (unsigned long)s->seq_nav, (unsigned long)s->baro.seq,
+                         (unsigned long)s->mag.seq);
 }
 
-static int set_noise(lowrate_t *lr, PyObject *arr, Py_ssize_t width, const char *what)
+/* Hold a (rows, width) float64 array and point the sensor's noise at it. */
+static int set_noise(sb_lowrate *lr, Py_buffer *held, PyObject *arr, Py_ssize_t width,
+                     const char *what)
 {
     Py_buffer v;
     if (sb_step_get_f64(arr, &v, width, 0, what) < 0)
@@ -74,43 +65,31 @@ static int set_noise(lowrate_t *lr, PyObject *arr, Py_ssize_t width, const char 
         PyBuffer_Release(&v);
         return -1;
     }
-    sb_step_release(&lr->noise);
-    lr->noise = v;
-    lr->rows = v.shape[0];
-    lr->pos = 0;
+    sb_step_release(held);
+    *held = v;
+    sb_lowrate_set_noise(lr, (const double *)v.buf, (size_t)v.shape[0]);
     return 0;
 }
 
-static int start_schedule(lowrate_t *lr, double rate_hz)
+static int start_schedule(sb_lowrate *lr, double rate_hz)
 {
-    if (!(rate_hz > 0.0)) {
+    if (sb_lowrate_start(lr, rate_hz) < 0) {
         PyErr_SetString(PyExc_ValueError, "rate_hz must be > 0");
         return -1;
     }
-    lr->rate_hz = rate_hz;
-    lr->m = 1;
-    lr->next_ns = sb_due_ns(1, rate_hz);
-    lr->on = 1;
     return 0;
 }
 
-/* configure_baro(rate_hz, offset_pa, noise_pa, get_temp) */
+/* configure_baro(rate_hz, offset_pa, noise_pa) */
 PyObject *Kernel_configure_baro(Kernel *self, PyObject *args)
 {
     double rate, off, noise;
-    PyObject *get_temp;
-    if (!PyArg_ParseTuple(args, "dddO", &rate, &off, &noise, &get_temp))
+    if (!PyArg_ParseTuple(args, "ddd", &rate, &off, &noise))
         return NULL;
-    if (!PyCallable_Check(get_temp)) {
-        PyErr_SetString(PyExc_TypeError, "get_temp must be callable");
+    if (start_schedule(&self->stage.baro, rate) < 0)
         return NULL;
-    }
-    if (start_schedule(&self->baro, rate) < 0)
-        return NULL;
-    self->baro_offset_pa = off;
-    self->baro_noise_pa = noise;
-    Py_INCREF(get_temp);
-    Py_XSETREF(self->get_temp, get_temp);
+    self->stage.baro_offset_pa = off;
+    self->stage.baro_noise_pa = noise;
     Py_RETURN_NONE;
 }
 
@@ -122,78 +101,30 @@ PyObject *Kernel_configure_mag(Kernel *self, PyObject *args)
     if (!PyArg_ParseTuple(args, "d(ddd)(ddd)d", &rate, &f[0], &f[1], &f[2], &o[0], &o[1], &o[2],
                           &noise))
         return NULL;
-    if (start_schedule(&self->mag, rate) < 0)
+    if (start_schedule(&self->stage.mag, rate) < 0)
         return NULL;
-    memcpy(self->mag_field_ned, f, sizeof f);
-    memcpy(self->mag_offset, o, sizeof o);
-    self->mag_noise_gauss = noise;
+    memcpy(self->stage.mag_field_ned_gauss, f, sizeof f);
+    memcpy(self->stage.mag_offset_gauss, o, sizeof o);
+    self->stage.mag_noise_gauss = noise;
     Py_RETURN_NONE;
 }
 
 PyObject *Kernel_set_baro_block(Kernel *self, PyObject *arr)
 {
-    return set_noise(&self->baro, arr, 1, "baro noise") < 0 ? NULL : Py_NewRef(Py_None);
+    return set_noise(&self->stage.baro, &self->baro_noise, arr, 1, "baro noise") < 0
+               ? NULL : Py_NewRef(Py_None);
 }
 
 PyObject *Kernel_set_mag_block(Kernel *self, PyObject *arr)
 {
-    return set_noise(&self->mag, arr, 3, "mag noise") < 0 ? NULL : Py_NewRef(Py_None);
-}
-
-/* set_forces([(setters (3 callables), [(c_n, w_rad_s, t_on_s, phase_rad, periodic,
- *   (ax, ay, az)), ...]), ...]): at most 2 frames; [] clears. */
-PyObject *Kernel_set_forces(Kernel *self, PyObject *plan)
-{
-    PyObject *frames = PySequence_Fast(plan, "set_forces: a list of (setters, items)");
-    if (frames == NULL)
-        return NULL;
-    sb_step_clear_forces(self);
-    const Py_ssize_t nf = PySequence_Fast_GET_SIZE(frames);
-    if (nf > 2) {
-        PyErr_SetString(PyExc_ValueError, "set_forces: at most 2 frames (ned, frd)");
-        goto fail;
-    }
-    for (Py_ssize_t f = 0; f < nf; f++) {
-        PyObject *setters, *items;
-        if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(frames, f), "OO", &setters, &items))
-            goto fail;
-        force_frame_t *fr = &self->forces[f];
-        self->n_force_frames = (int)f + 1;
-        if (sb_step_take_callables(setters, fr->set, 3, "force direction setters") < 0)
-            goto fail;
-        PyObject *its = PySequence_Fast(items, "set_forces: items must be a sequence");
-        if (its == NULL)
-            goto fail;
-        fr->n = PySequence_Fast_GET_SIZE(its);
-        fr->items = PyMem_Calloc((size_t)(fr->n ? fr->n : 1), sizeof *fr->items);
-        if (fr->items == NULL) {
-            Py_DECREF(its);
-            PyErr_NoMemory();
-            goto fail;
-        }
-        for (Py_ssize_t i = 0; i < fr->n; i++) {
-            force_item_t *it = &fr->items[i];
-            if (!PyArg_ParseTuple(PySequence_Fast_GET_ITEM(its, i), "ddddp(ddd)", &it->c_n,
-                                  &it->w_rad_s, &it->t_on_s, &it->phase_rad, &it->periodic,
-                                  &it->axis[0], &it->axis[1], &it->axis[2])) {
-                Py_DECREF(its);
-                goto fail;
-            }
-        }
-        Py_DECREF(its);
-    }
-    Py_DECREF(frames);
-    Py_RETURN_NONE;
-fail:
-    sb_step_clear_forces(self);
-    Py_DECREF(frames);
-    return NULL;
+    return set_noise(&self->stage.mag, &self->mag_noise, arr, 3, "mag noise") < 0
+               ? NULL : Py_NewRef(Py_None);
 }
 
 static PyObject *Kernel_get_next_slow(Kernel *self, void *closure)
 {
     (void)closure;
-    return PyLong_FromLongLong(self->next_slow_ns);
+    return PyLong_FromLongLong(self->stage.next_slow_ns);
 }
 
 static int Kernel_set_next_slow(Kernel *self, PyObject *v, void *closure)
@@ -202,14 +133,14 @@ static int Kernel_set_next_slow(Kernel *self, PyObject *v, void *closure)
     long long x = v ? PyLong_AsLongLong(v) : -1;
     if (x == -1 && PyErr_Occurred())
         return -1;
-    self->next_slow_ns = x;
+    self->stage.next_slow_ns = x;
     return 0;
 }
 
 static PyObject *Kernel_get_pos(Kernel *self, void *closure)
 {
     (void)closure;
-    return PyLong_FromSsize_t(self->pos);
+    return PyLong_FromSize_t(self->stage.imu_pos);
 }
 
 PyGetSetDef sb_step_getset[] = {

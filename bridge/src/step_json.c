@@ -4,11 +4,11 @@
  *
  * ArduPilot SITL's JSON interface is a lockstep round trip per 1 ms physics
  * frame, so every microsecond between its servo packet and our reply is a
- * microsecond of SITL's frame time. Done in Python (bridge/ardupilot_physics.py
+ * microsecond of SITL's frame time. Done in Python (tests/bridge/json_reply_oracle.py
  * reads the records with struct, averages the IMU, converts the quaternion and
  * %-formats the line) this costs ~10 us per packet on the 2-core VM, as much as
  * the JSBSim step itself; here it is ~1 us. The Python path stays as the readable
- * reference: tests/bridge/test_ardupilot_json.py checks the two lines are the
+ * reference: tests/bridge/test_json_reply.py checks the two lines are the
  * same bytes.
  *
  * The numbers are formatted by CPython's own float formatter (repr, with its
@@ -17,7 +17,7 @@
  */
 #include "step_kernel.h"
 
-/* The reply's values, in the line's order (ardupilot_json.py _STATE_FMT). */
+/* The reply's values, in the line's order (bridge/autopilots/ardupilot/json_protocol.py _STATE_FMT). */
 enum { V_TIME, V_GYRO, V_ACCEL = 4, V_POS = 7, V_EULER = 10, V_QUAT = 13, V_VEL = 17, V_COUNT = 20 };
 
 /* Keys and separators before each value; digits per value (0 = repr). */

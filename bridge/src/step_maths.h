@@ -2,7 +2,7 @@
  * step_maths.h - the per-step sensor and truth maths of the bridge, in C.
  *
  * Same formulas, in the same operation order, as the readable Python reference
- * (bridge/step_python.py): compiled without floating-point contraction, both
+ * (tests/bridge/step_kernel_oracle.py): compiled without floating-point contraction, both
  * give the same doubles, so the C step and the reference produce byte-identical
  * records (tests/bridge/test_step_kernel.py holds them to that).
  */

@@ -2,20 +2,21 @@
  * stepmodule.c - silbridge.bridge._step: one physics step of the bridge in one call.
  *
  * `Kernel.step(pwm)` writes the four pulse widths into JSBSim, runs it, reads the
- * state back through the property nodes' bound methods, and writes the step's
- * IMU, GT_ATT and GT_NAV records (64-byte sb_record slots) into the simulator's
- * step buffer, and the baro and magnetometer records when due. Done from Python
- * this costs ~6 us of interpreter work per step on top of JSBSim's ~5 us; here it
- * is the bare calls. What happens at 10 Hz or less or only on events (GNSS fixes,
- * setpoints, crash messages, noise blocks) stays in Python (bridge/simulator.py),
- * told by the returned flags.
+ * FDM sample back through the property nodes' bound methods, and the sensor stage
+ * (sensor_stage.c, plain C) writes the step's IMU, GT_ATT and GT_NAV records (64-byte
+ * sb_record slots) into the simulator's step buffer, and the baro and magnetometer
+ * records when due. Done from Python this costs ~6 us of interpreter work per step on
+ * top of JSBSim's ~5 us; here it is the bare calls. What happens at 10 Hz or less or
+ * only on events (GNSS fixes, setpoints, crash messages, noise blocks) stays in Python
+ * (bridge/simulator.py), told by the returned flags.
  *
- * This file is the Python type: construction and argument checks, the step
- * methods' entry points, the module. The step itself is step_run.c, its maths
- * step_maths.c; the readable reference with the same interface is
- * bridge/step_python.py. Python objects the kernel calls are held as strong
- * references; the buffers it writes are held through Py_buffer views. The
- * methods that configure a kernel between steps are in step_config.c.
+ * This file is the Python type: construction and argument checks (the getters and
+ * constants arrive in dicts keyed by the names of the stage's tables, exported as
+ * SAMPLE_FIELDS and CONST_FIELDS), the step methods' entry points, the module. The
+ * step is step_run.c; the readable oracle with the same interface is
+ * tests/bridge/step_kernel_oracle.py. Python objects the kernel calls are held as strong
+ * references; the buffers it writes are held through Py_buffer views. The methods that
+ * configure a kernel between steps are in step_config.c and step_forces.c.
  */
 #include "step_kernel.h"
 
@@ -33,9 +34,8 @@ static int Kernel_traverse(Kernel *self, visitproc visit, void *arg)
     for (int i = 0; i < 4; i++)
         Py_VISIT(self->setters[i]);
     Py_VISIT(self->run);
-    for (int i = 0; i < G_COUNT; i++)
+    for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++)
         Py_VISIT(self->getters[i]);
-    Py_VISIT(self->get_temp);
     return 0;
 }
 
@@ -44,9 +44,8 @@ static int Kernel_clear(Kernel *self)
     for (int i = 0; i < 4; i++)
         Py_CLEAR(self->setters[i]);
     Py_CLEAR(self->run);
-    for (int i = 0; i < G_COUNT; i++)
+    for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++)
         Py_CLEAR(self->getters[i]);
-    Py_CLEAR(self->get_temp);
     sb_step_clear_forces(self);
     return 0;
 }
@@ -59,8 +58,8 @@ static void Kernel_dealloc(Kernel *self)
     sb_step_release(&self->state_view);
     sb_step_release(&self->block_view);
     sb_step_release(&self->temps_view);
-    sb_step_release(&self->baro.noise);
-    sb_step_release(&self->mag.noise);
+    sb_step_release(&self->baro_noise);
+    sb_step_release(&self->mag_noise);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -105,8 +104,85 @@ int sb_step_get_f64(PyObject *obj, Py_buffer *view, Py_ssize_t min_items, int wr
     return 0;
 }
 
+/* A {name: value} dict that names every entry of `table` once and nothing else. */
+static int check_names(PyObject *dict, const sb_named_double *table, int n, const char *what)
+{
+    if (!PyDict_Check(dict)) {
+        PyErr_Format(PyExc_TypeError, "%s must be a dict keyed by name", what);
+        return -1;
+    }
+    for (int i = 0; i < n; i++)
+        if (PyDict_GetItemString(dict, table[i].name) == NULL) {
+            PyErr_Format(PyExc_KeyError, "%s lacks %s", what, table[i].name);
+            return -1;
+        }
+    if (PyDict_Size(dict) == n)
+        return 0;
+    PyObject *key = NULL, *value;
+    Py_ssize_t pos = 0;
+    while (PyDict_Next(dict, &pos, &key, &value)) {
+        int known = 0;
+        for (int i = 0; i < n && !known; i++)
+            known = PyUnicode_Check(key) &&
+                    PyUnicode_CompareWithASCIIString(key, table[i].name) == 0;
+        if (!known)
+            break;
+    }
+    PyErr_Format(PyExc_KeyError, "%s: unknown name %R", what, key);
+    return -1;
+}
+
+/* getters {sample field name: callable} -> self->getters in SB_FDM_SAMPLE_FIELDS order. */
+static int take_getters(Kernel *self, PyObject *getters)
+{
+    if (check_names(getters, SB_FDM_SAMPLE_FIELDS, SB_FDM_SAMPLE_FIELD_COUNT, "getters") < 0)
+        return -1;
+    for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++) {
+        PyObject *f = PyDict_GetItemString(getters, SB_FDM_SAMPLE_FIELDS[i].name);
+        if (!PyCallable_Check(f)) {
+            PyErr_Format(PyExc_TypeError, "getter %s is not callable",
+                         SB_FDM_SAMPLE_FIELDS[i].name);
+            return -1;
+        }
+        Py_INCREF(f);
+        Py_XSETREF(self->getters[i], f);
+    }
+    return 0;
+}
+
+/* consts {constant name: float} -> the named fields of *c. */
+static int take_consts(sb_stage_consts *c, PyObject *consts)
+{
+    if (check_names(consts, SB_STAGE_CONST_FIELDS, SB_STAGE_CONST_FIELD_COUNT, "consts") < 0)
+        return -1;
+    for (int i = 0; i < SB_STAGE_CONST_FIELD_COUNT; i++) {
+        const double v =
+            PyFloat_AsDouble(PyDict_GetItemString(consts, SB_STAGE_CONST_FIELDS[i].name));
+        if (v == -1.0 && PyErr_Occurred())
+            return -1;
+        memcpy((char *)c + SB_STAGE_CONST_FIELDS[i].offset, &v, sizeof v);
+    }
+    return 0;
+}
+
+/* The step buffer and the state array the stage writes. */
+static int take_buffers(Kernel *self, PyObject *buf, PyObject *state)
+{
+    if (PyObject_GetBuffer(buf, &self->buf_view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+        return -1;
+    if (self->buf_view.len < 3 * (Py_ssize_t)sizeof(sb_record) ||
+        ((uintptr_t)self->buf_view.buf & 7u) != 0) {
+        PyErr_SetString(PyExc_ValueError, "buffer must be 8-byte aligned and hold >= 3 records");
+        return -1;
+    }
+    self->slots = (sb_record *)self->buf_view.buf;
+    self->n_slots = self->buf_view.len / (Py_ssize_t)sizeof(sb_record);
+    return sb_step_get_f64(state, &self->state_view, ST_COUNT, 1, "state");
+}
+
 /* Kernel(buffer, setters, run, getters, state, consts, phase, dt_ns, flip_steps, scalar_imu,
- *        on_ground): on_ground is the contact state before the first step. */
+ *        on_ground): getters and consts are dicts keyed by the names in SAMPLE_FIELDS and
+ *        CONST_FIELDS; on_ground is the contact state before the first step. */
 static int Kernel_init(Kernel *self, PyObject *args, PyObject *kwds)
 {
     PyObject *buf, *setters, *run, *getters, *state, *consts, *phase;
@@ -122,8 +198,12 @@ static int Kernel_init(Kernel *self, PyObject *args, PyObject *kwds)
         PyErr_SetString(PyExc_RuntimeError, "Kernel is already initialised");
         return -1;
     }
+    if (dt_ns <= 0 || flip_steps <= 0) {
+        PyErr_SetString(PyExc_ValueError, "dt_ns and flip_steps must be > 0");
+        return -1;
+    }
     if (sb_step_take_callables(setters, self->setters, 4, "setters") < 0 ||
-        sb_step_take_callables(getters, self->getters, G_COUNT, "getters") < 0)
+        take_getters(self, getters) < 0)
         return -1;
     if (!PyCallable_Check(run)) {
         PyErr_SetString(PyExc_TypeError, "run must be callable");
@@ -131,42 +211,15 @@ static int Kernel_init(Kernel *self, PyObject *args, PyObject *kwds)
     }
     Py_INCREF(run);
     Py_XSETREF(self->run, run);
-    if (PyObject_GetBuffer(buf, &self->buf_view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+    sb_stage_consts c;
+    Py_buffer pv;
+    if (take_consts(&c, consts) < 0 || take_buffers(self, buf, state) < 0 ||
+        sb_step_get_f64(phase, &pv, 4, 0, "phase") < 0)
         return -1;
-    if (self->buf_view.len < 3 * (Py_ssize_t)sizeof(sb_record) ||
-        ((uintptr_t)self->buf_view.buf & 7u) != 0) {
-        PyErr_SetString(PyExc_ValueError, "buffer must be 8-byte aligned and hold >= 3 records");
-        return -1;
-    }
-    self->slots = (sb_record *)self->buf_view.buf;
-    self->n_slots = self->buf_view.len / (Py_ssize_t)sizeof(sb_record);
-    if (sb_step_get_f64(state, &self->state_view, ST_COUNT, 1, "state") < 0)
-        return -1;
-    self->st = (double *)self->state_view.buf;
-    Py_buffer cv, pv;
-    if (sb_step_get_f64(consts, &cv, C_COUNT, 0, "consts") < 0)
-        return -1;
-    memcpy(self->c, cv.buf, sizeof self->c);
-    PyBuffer_Release(&cv);
-    if (sb_step_get_f64(phase, &pv, 4, 0, "phase") < 0)
-        return -1;
-    memcpy(self->phase, pv.buf, sizeof self->phase);
+    sb_sensor_stage_init(&self->stage, &c, (double *)self->state_view.buf,
+                         (const double *)pv.buf, flip_steps, scalar_imu, on_ground);
     PyBuffer_Release(&pv);
-    if (dt_ns <= 0 || flip_steps <= 0) {
-        PyErr_SetString(PyExc_ValueError, "dt_ns and flip_steps must be > 0");
-        return -1;
-    }
-    self->imu.dt_s = self->c[C_DT_S];
-    self->imu.inv_omega_max2 = self->c[C_INV_OMEGA_MAX2];
-    self->imu.vib_accel = self->c[C_VIB_A];
-    self->imu.vib_gyro = self->c[C_VIB_G];
-    self->imu.range_accel = self->c[C_RANGE_A];
-    self->imu.range_gyro = self->c[C_RANGE_G];
     self->dt_ns = dt_ns;
-    self->flip_steps = flip_steps;
-    self->scalar_imu = scalar_imu;
-    self->next_slow_ns = 0;
-    self->was_on_ground = on_ground;
     return 0;
 }
 
@@ -176,7 +229,7 @@ static PyObject *Kernel_step(Kernel *self, PyObject *const *args, Py_ssize_t nar
         PyErr_SetString(PyExc_TypeError, "step(pwm) takes one tuple of 4 pulse widths");
         return NULL;
     }
-    if (!self->scalar_imu) {
+    if (!self->stage.scalar_imu) {
         PyErr_SetString(PyExc_RuntimeError, "this kernel writes no IMU: use step_gt(pwm, slot)");
         return NULL;
     }
@@ -190,7 +243,7 @@ static PyObject *Kernel_step_gt(Kernel *self, PyObject *const *args, Py_ssize_t 
         PyErr_SetString(PyExc_TypeError, "step_gt(pwm, slot)");
         return NULL;
     }
-    if (self->scalar_imu) {
+    if (self->stage.scalar_imu) {
         PyErr_SetString(PyExc_RuntimeError, "this kernel writes the IMU: use step(pwm)");
         return NULL;
     }
@@ -217,7 +270,7 @@ static PyMethodDef Kernel_methods[] = {
     {"seqs", (PyCFunction)Kernel_seqs, METH_NOARGS,
      "records written: (imu, gt_att, gt_nav, baro, mag)"},
     {"configure_baro", (PyCFunction)Kernel_configure_baro, METH_VARARGS,
-     "configure_baro(rate_hz, offset_pa, noise_pa, get_temp): sample the baro here"},
+     "configure_baro(rate_hz, offset_pa, noise_pa): sample the baro here"},
     {"configure_mag", (PyCFunction)Kernel_configure_mag, METH_VARARGS,
      "configure_mag(rate_hz, field_ned, offset, noise_gauss): sample the mag here"},
     {"set_baro_block", (PyCFunction)Kernel_set_baro_block, METH_O,
@@ -248,6 +301,27 @@ static struct PyModuleDef stepmodule = {
     PyModuleDef_HEAD_INIT, "_step", "The bridge's per-step C kernel", -1, sb_step_json_methods,
     NULL, NULL, NULL, NULL};
 
+/* module.NAME = the names of a table, in its order: what Python's dicts are keyed by. */
+static int add_names(PyObject *m, const char *attr, const sb_named_double *table, int n)
+{
+    PyObject *t = PyTuple_New(n);
+    if (t == NULL)
+        return -1;
+    for (int i = 0; i < n; i++) {
+        PyObject *name = PyUnicode_FromString(table[i].name);
+        if (name == NULL) {
+            Py_DECREF(t);
+            return -1;
+        }
+        PyTuple_SET_ITEM(t, i, name);
+    }
+    if (PyModule_AddObject(m, attr, t) < 0) {
+        Py_DECREF(t);
+        return -1;
+    }
+    return 0;
+}
+
 PyMODINIT_FUNC PyInit__step(void)
 {
     if (PyType_Ready(&KernelType) < 0)
@@ -266,11 +340,19 @@ PyMODINIT_FUNC PyInit__step(void)
         {"F_GROUND_CHANGED", F_GROUND_CHANGED}, {"F_TIPPED", F_TIPPED},
         {"F_FLIPPED", F_FLIPPED}, {"F_ROTOR_STRIKE", F_ROTOR_STRIKE},
         {"F_BARO_BLOCK_DONE", F_BARO_BLOCK_DONE}, {"F_MAG_BLOCK_DONE", F_MAG_BLOCK_DONE},
-        {"ST_COUNT", ST_COUNT}, {"G_COUNT", G_COUNT}, {"C_COUNT", C_COUNT}};
+        {"ST_W", ST_W}, {"ST_F", ST_F}, {"ST_EULER", ST_EULER}, {"ST_VEL", ST_VEL},
+        {"ST_LAT", ST_LAT}, {"ST_LON", ST_LON}, {"ST_HAGL", ST_HAGL}, {"ST_OMEGA", ST_OMEGA},
+        {"ST_ON_GROUND", ST_ON_GROUND}, {"ST_BARO_PA", ST_BARO_PA}, {"ST_TEMP_C", ST_TEMP_C},
+        {"ST_PREV_VD", ST_PREV_VD}, {"ST_COS_TILT", ST_COS_TILT}, {"ST_COUNT", ST_COUNT}};
     for (size_t i = 0; i < sizeof ints / sizeof ints[0]; i++)
         if (PyModule_AddIntConstant(m, ints[i].name, ints[i].v) < 0) {
             Py_DECREF(m);
             return NULL;
         }
+    if (add_names(m, "SAMPLE_FIELDS", SB_FDM_SAMPLE_FIELDS, SB_FDM_SAMPLE_FIELD_COUNT) < 0 ||
+        add_names(m, "CONST_FIELDS", SB_STAGE_CONST_FIELDS, SB_STAGE_CONST_FIELD_COUNT) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
     return m;
 }

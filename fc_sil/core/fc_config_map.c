@@ -46,21 +46,21 @@ static void map_estimation(const fc_params_t *p, fc_core_config_t *cfg)
 
 static void map_attitude(const fc_params_t *p, fc_core_config_t *cfg)
 {
-    cfg->att.ang_p[0] = p->atc_ang_rll_p;
-    cfg->att.ang_p[1] = p->atc_ang_pit_p;
-    cfg->att.ang_p[2] = p->atc_ang_yaw_p;
-    cfg->att.rate_max_rad_s[0] = p->atc_rate_r_max * FC_DEG_TO_RAD_F;
-    cfg->att.rate_max_rad_s[1] = p->atc_rate_p_max * FC_DEG_TO_RAD_F;
-    cfg->att.rate_max_rad_s[2] = p->atc_rate_y_max * FC_DEG_TO_RAD_F;
-    cfg->angle_max_rad = p->angle_max * 0.01f * FC_DEG_TO_RAD_F; /* centidegrees */
+    cfg->ctl.att.ang_p[0] = p->atc_ang_rll_p;
+    cfg->ctl.att.ang_p[1] = p->atc_ang_pit_p;
+    cfg->ctl.att.ang_p[2] = p->atc_ang_yaw_p;
+    cfg->ctl.att.rate_max_rad_s[0] = p->atc_rate_r_max * FC_DEG_TO_RAD_F;
+    cfg->ctl.att.rate_max_rad_s[1] = p->atc_rate_p_max * FC_DEG_TO_RAD_F;
+    cfg->ctl.att.rate_max_rad_s[2] = p->atc_rate_y_max * FC_DEG_TO_RAD_F;
+    cfg->ctl.angle_max_rad = p->angle_max * 0.01f * FC_DEG_TO_RAD_F; /* centidegrees */
 
-    cfg->shaper.enable = p->atc_rate_ff_enab != 0 && p->sb_shape_en != 0;
-    cfg->shaper.input_tc_s = p->atc_input_tc;
-    cfg->shaper.accel_max_rad_s2[0] = p->atc_accel_r_max * 0.01f * FC_DEG_TO_RAD_F;
-    cfg->shaper.accel_max_rad_s2[1] = p->atc_accel_p_max * 0.01f * FC_DEG_TO_RAD_F;
-    cfg->shaper.accel_max_rad_s2[2] = p->atc_accel_y_max * 0.01f * FC_DEG_TO_RAD_F;
+    cfg->ctl.shaper.enable = p->atc_rate_ff_enab != 0 && p->sb_shape_en != 0;
+    cfg->ctl.shaper.input_tc_s = p->atc_input_tc;
+    cfg->ctl.shaper.accel_max_rad_s2[0] = p->atc_accel_r_max * 0.01f * FC_DEG_TO_RAD_F;
+    cfg->ctl.shaper.accel_max_rad_s2[1] = p->atc_accel_p_max * 0.01f * FC_DEG_TO_RAD_F;
+    cfg->ctl.shaper.accel_max_rad_s2[2] = p->atc_accel_y_max * 0.01f * FC_DEG_TO_RAD_F;
     for (int i = 0; i < 3; i++) {
-        cfg->shaper.rate_max_rad_s[i] = cfg->att.rate_max_rad_s[i];
+        cfg->ctl.shaper.rate_max_rad_s[i] = cfg->ctl.att.rate_max_rad_s[i];
     }
 }
 
@@ -78,7 +78,7 @@ static void map_rate_loop(const fc_params_t *p, fc_core_config_t *cfg)
          p->atc_rat_yaw_imax, p->atc_rat_yaw_fltt, p->atc_rat_yaw_flte, p->atc_rat_yaw_fltd},
     };
     for (int i = 0; i < 3; i++) {
-        fc_rate_pid_config_t *pc = &cfg->pid[i];
+        fc_rate_pid_config_t *pc = &cfg->ctl.pid[i];
         pc->kp = gains[i][0];
         pc->ki = gains[i][1];
         pc->kd = gains[i][2];
@@ -94,20 +94,20 @@ static void map_rate_loop(const fc_params_t *p, fc_core_config_t *cfg)
         pc->antiwindup = (i == 2) ? (p->sb_yaw_aw_en != 0) : true;
     }
 
-    cfg->trim.enable = p->sb_trim_en != 0;
-    cfg->trim.ramp_enable = p->sb_trim_ramp_en != 0;
-    cfg->trim.window_s = p->sb_trim_win_s;
-    cfg->trim.gain_us_per_rad = p->sb_trim_gain;
-    cfg->trim.max_us = p->sb_trim_max_us;
-    cfg->trim.ramp_s = p->sb_trim_ramp_s;
+    cfg->ctl.trim.enable = p->sb_trim_en != 0;
+    cfg->ctl.trim.ramp_enable = p->sb_trim_ramp_en != 0;
+    cfg->ctl.trim.window_s = p->sb_trim_win_s;
+    cfg->ctl.trim.gain_us_per_rad = p->sb_trim_gain;
+    cfg->ctl.trim.max_us = p->sb_trim_max_us;
+    cfg->ctl.trim.ramp_s = p->sb_trim_ramp_s;
 
-    cfg->sysid.axis = (uint8_t)p->sid_axis; /* range 0..13 (fc_params.def) */
-    cfg->sysid.magnitude = p->sid_magnitude;
-    cfg->sysid.f_start_hz = p->sid_f_start_hz;
-    cfg->sysid.f_stop_hz = p->sid_f_stop_hz;
-    cfg->sysid.t_fade_in_s = p->sid_t_fade_in;
-    cfg->sysid.t_rec_s = p->sid_t_rec;
-    cfg->sysid.t_fade_out_s = p->sid_t_fade_out;
+    cfg->ctl.sysid.axis = (uint8_t)p->sid_axis; /* range 0..13 (fc_params.def) */
+    cfg->ctl.sysid.magnitude = p->sid_magnitude;
+    cfg->ctl.sysid.f_start_hz = p->sid_f_start_hz;
+    cfg->ctl.sysid.f_stop_hz = p->sid_f_stop_hz;
+    cfg->ctl.sysid.t_fade_in_s = p->sid_t_fade_in;
+    cfg->ctl.sysid.t_rec_s = p->sid_t_rec;
+    cfg->ctl.sysid.t_fade_out_s = p->sid_t_fade_out;
 
     cfg->loop_period_s = 1.0f / (float)p->sb_loop_hz;
 }
@@ -123,16 +123,16 @@ static void map_vertical_and_motors(const fc_params_t *p, fc_core_config_t *cfg)
     cfg->mix.slew_dn_time_s = p->mot_slew_dn_time;
     cfg->mix.slew_enable = p->sb_slew_en != 0;
 
-    cfg->alt.pos_p = p->psc_posz_p;
-    cfg->alt.vel_p = p->psc_velz_p;
-    cfg->alt.acc_p = p->psc_accz_p;
-    cfg->alt.acc_i = p->psc_accz_i;
-    cfg->alt.acc_imax = p->psc_accz_imax;
-    cfg->alt.acc_flte_hz = p->psc_accz_flte;
-    cfg->alt.speed_up_m_s = p->pilot_speed_up * 0.01f; /* cm/s */
-    cfg->alt.speed_dn_m_s =
+    cfg->ctl.alt.pos_p = p->psc_posz_p;
+    cfg->ctl.alt.vel_p = p->psc_velz_p;
+    cfg->ctl.alt.acc_p = p->psc_accz_p;
+    cfg->ctl.alt.acc_i = p->psc_accz_i;
+    cfg->ctl.alt.acc_imax = p->psc_accz_imax;
+    cfg->ctl.alt.acc_flte_hz = p->psc_accz_flte;
+    cfg->ctl.alt.speed_up_m_s = p->pilot_speed_up * 0.01f; /* cm/s */
+    cfg->ctl.alt.speed_dn_m_s =
         ((p->pilot_speed_dn > 0) ? p->pilot_speed_dn : p->pilot_speed_up) * 0.01f;
-    cfg->alt.hover_throttle = p->mot_thst_hover;
+    cfg->ctl.alt.hover_throttle = p->mot_thst_hover;
     cfg->alt_sched.tc_s = p->sb_alt_tc;
     cfg->alt_sched.tc_hold_s = p->sb_alt_tc_hold;
     cfg->alt_sched.innov_m = p->sb_alt_innov;
@@ -141,6 +141,11 @@ static void map_vertical_and_motors(const fc_params_t *p, fc_core_config_t *cfg)
     cfg->spool.spin_arm = p->mot_spin_arm;
     cfg->spool.spin_min = p->mot_spin_min;
     cfg->spool.land_speed_m_s = (float)p->land_speed * 0.01f; /* cm/s */
+
+    /* What the control law needs of the mixer's and the spool logic's settings. */
+    cfg->ctl.spool = cfg->spool;
+    cfg->ctl.pwm_min_us = cfg->mix.pwm_min_us;
+    cfg->ctl.pwm_max_us = cfg->mix.pwm_max_us;
 }
 
 void fc_config_map(const fc_params_t *p, fc_core_config_t *cfg)

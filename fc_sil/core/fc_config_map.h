@@ -11,35 +11,24 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "fc_alt_ctrl.h"
-#include "fc_attitude.h"
+#include "fc_control.h"
 #include "fc_ins.h"
 #include "fc_mahony.h"
 #include "fc_sched.h"
 #include "fc_mixer.h"
 #include "fc_params.h"
-#include "fc_rate_pid.h"
-#include "fc_shaper.h"
 #include "fc_spool.h"
 #include "fc_state_source.h"
-#include "fc_sysid.h"
-#include "fc_trim.h"
 
 typedef struct fc_core_config {
     fc_ins_config_t ins;
     fc_mahony_config_t ahrs;        /* in flight (armed) */
     fc_mahony_config_t ahrs_ground; /* disarmed: fast alignment and bias learning */
     fc_source_config_t source;
-    fc_attitude_config_t att;
-    fc_shaper_config_t shaper;
-    fc_rate_pid_config_t pid[3];    /* roll, pitch, yaw */
-    fc_trim_config_t trim;
+    fc_control_config_t ctl;        /* the control law (fc_control.h) */
     fc_mixer_config_t mix;
-    fc_alt_ctrl_config_t alt;
     fc_alt_sched_config_t alt_sched; /* the vertical filter's time constants (fc_sched.h) */
     fc_spool_config_t spool;
-    fc_sysid_config_t sysid;
-    float angle_max_rad;            /* roll and pitch target limit (ANGLE_MAX) [rad] */
     float loop_period_s;            /* shortest rate-loop period (SB_LOOP_HZ) [s] */
 } fc_core_config_t;
 

@@ -2,17 +2,37 @@
  * fc_core.c - the flight-controller chain's life cycle and scheduling: the
  * parameters, reset, the IMU step with its rate-loop decimation, the routing
  * of the other sensors and of ground truth, and the PWM tick with its status
- * snapshot (see fc_core.h for the order of the blocks). The control law is in
- * fc_control.c, the spool logic in fc_spool.c, the inputs in fc_core_inputs.c.
+ * snapshot (see fc_core.h for the order of the blocks). The control law is a
+ * block of its own (fc_control.c), the spool logic in fc_spool.c, the inputs in
+ * fc_core_inputs.c.
  */
 #include "fc_core.h"
 
 #include <stddef.h>
+#include <string.h>
 
-#include "fc_control.h"
 #include "fc_math.h"
 
 _Static_assert(sizeof(fc_core_status_t) == 248, "fc_core_status_t layout is mirrored in Python");
+
+/* fc_control_out_t opens with the status's rate-loop block (att_target_rad ..
+ * pid_ff) field for field, so fill_status copies that block in one piece. */
+#define FC_STATUS_CTL_OFFSET offsetof(fc_core_status_t, att_target_rad)
+#define FC_CTL_REPORT_BYTES (offsetof(fc_control_out_t, pid_ff_us) + sizeof(float[3]))
+#define FC_CTL_SAME_PLACE(out_field, status_field)                                          \
+    _Static_assert(offsetof(fc_control_out_t, out_field)                                    \
+                           == offsetof(fc_core_status_t, status_field) - FC_STATUS_CTL_OFFSET \
+                       && sizeof(((fc_control_out_t *)0)->out_field)                        \
+                              == sizeof(((fc_core_status_t *)0)->status_field),             \
+                   #out_field " is not where the status holds " #status_field)
+FC_CTL_SAME_PLACE(att_target_rad, att_target_rad);
+FC_CTL_SAME_PLACE(att_error_frd_rad, att_error_frd_rad);
+FC_CTL_SAME_PLACE(rate_target_frd_rad_s, rate_target_frd_rad_s);
+FC_CTL_SAME_PLACE(rate_frd_rad_s, rate_frd_rad_s);
+FC_CTL_SAME_PLACE(pid_p_us, pid_p);
+FC_CTL_SAME_PLACE(pid_i_us, pid_i);
+FC_CTL_SAME_PLACE(pid_d_us, pid_d);
+FC_CTL_SAME_PLACE(pid_ff_us, pid_ff);
 
 /* dt limits for one IMU step: a longer gap (a paused simulation) is integrated
  * as 50 ms so the filters and integrators see a bounded step. */
@@ -42,11 +62,7 @@ void fc_core_apply_params(fc_core_t *c)
     map_params(c);
     (void)fc_ins_configure(&c->ins, &c->cfg.ins, c->imu_dt_s);
     fc_mahony_configure(&c->ahrs, c->ahrs_ground ? &c->cfg.ahrs_ground : &c->cfg.ahrs);
-    for (int i = 0; i < 3; i++) {
-        /* Each PID keeps the period it last stepped at (fc_rate_pid_update). */
-        fc_rate_pid_configure(&c->pid[i], &c->cfg.pid[i], c->pid[i].dt_s);
-    }
-    fc_alt_ctrl_configure(&c->alt_ctrl, &c->cfg.alt, pwm_period_s(c));
+    fc_control_configure(&c->ctl, &c->cfg.ctl, pwm_period_s(c));
 }
 
 fc_status_t fc_core_set_param(fc_core_t *c, uint16_t index, float value)
@@ -76,6 +92,31 @@ fc_status_t fc_core_get_param(const fc_core_t *c, uint16_t index, float *value)
     return fc_param_get(&c->params, index, value);
 }
 
+/* ---- the control law's surroundings ------------------------------------ */
+
+/* Its inputs as they stand now: the spool logic and the mixer move them
+ * between its steps. */
+static const fc_control_in_t *control_inputs(fc_core_t *c)
+{
+    fc_control_in_t *in = &c->ctl_in;
+    in->cmd = c->in;
+    in->now_ns = c->last_imu_ns;
+    in->spool = c->spool;
+    in->airborne = c->spool_logic.airborne;
+    in->sat_flags = c->mixer.sat_flags;
+    return in;
+}
+
+/* Controllers to rest; the mixer's slew state too only when reset_mixer
+ * (arming and disarming): on landing the outputs slew down to idle, no dip. */
+static void control_reset(fc_core_t *c, bool reset_mixer)
+{
+    fc_control_reset(&c->ctl, &c->cfg.ctl, &c->ctl_out);
+    if (reset_mixer) {
+        fc_mixer_reset(&c->mixer, &c->cfg.mix);
+    }
+}
+
 /* ---- life cycle --------------------------------------------------------- */
 
 void fc_core_reset(fc_core_t *c)
@@ -88,19 +129,14 @@ void fc_core_reset(fc_core_t *c)
     (void)fc_ins_init(&c->ins, &c->cfg.ins, c->imu_dt_s);
     fc_mahony_init(&c->ahrs, &c->cfg.ahrs_ground);
     c->ahrs_ground = true;
-    for (int i = 0; i < 3; i++) {
-        fc_rate_pid_init(&c->pid[i], &c->cfg.pid[i], FC_NOMINAL_DT_S);
-    }
     fc_state_source_reset(&c->source);
     fc_vehicle_state_reset(&c->state);
     fc_alt_est_reset(&c->alt_est);
     fc_alt_sched_reset(&c->alt_sched, &c->cfg.alt_sched);
-    fc_alt_ctrl_init(&c->alt_ctrl, &c->cfg.alt, pwm_period_s(c));
     fc_gnss_aid_reset(&c->gnss_aid);
     c->gnss_aid_count = 0;
-    fc_sysid_t sid = {0};
-    c->sysid = sid;
-    fc_control_reset(c, true);
+    fc_control_init(&c->ctl, &c->cfg.ctl, FC_NOMINAL_DT_S, pwm_period_s(c), &c->ctl_out);
+    fc_mixer_reset(&c->mixer, &c->cfg.mix);
     fc_spool_reset(&c->spool_logic, &c->spool);
 
     c->have_imu = false;
@@ -109,11 +145,6 @@ void fc_core_reset(fc_core_t *c)
     c->next_pwm_ns = 0;
     fc_gnss_store_t g = {0};
     c->gnss = g;
-    for (int i = 0; i < 3; i++) {
-        c->att_target_rad[i] = 0.0f;
-        c->rate_frd_rad_s[i] = 0.0f;
-    }
-    fc_shaper_reset(&c->shaper, c->att_target_rad);
     c->imu_count = 0;
     c->loop_count = 0;
     c->pwm_count = 0;
@@ -191,7 +222,9 @@ fc_status_t fc_core_imu_step(fc_core_t *c, int64_t sim_ns, const float accel_frd
         c->loop_accum_s = 0.0f;
         fc_state_source_attitude(&c->source, &c->cfg.source, &c->ahrs, &c->ins, c->last_imu_ns,
                                  loop_dt, &c->state);
-        fc_control_rate_step(c, &c->state, loop_dt);
+        fc_control_rate_step(&c->ctl, &c->cfg.ctl, control_inputs(c), &c->state, loop_dt,
+                             &c->ctl_out);
+        c->loop_count++;
     }
     return FC_OK;
 }
@@ -216,7 +249,7 @@ static float alt_seek_demand(const fc_core_t *c)
         return 1.0f;
     }
     const float err = fabsf(c->in.alt_target_m - c->alt_est.alt_m) / FC_ALT_HOLD_ERR_M;
-    const float climb = fabsf(c->alt_ctrl.climb_target_m_s) / FC_LAND_CLIMB_M_S;
+    const float climb = fabsf(c->ctl.alt_ctrl.climb_target_m_s) / FC_LAND_CLIMB_M_S;
     return fmaxf(err, climb) - 1.0f; /* NaN or above 1: fc_alt_sched_step clamps to 1 */
 }
 
@@ -330,17 +363,10 @@ static void fill_status(fc_core_t *c, int64_t tick_ns, const uint16_t pwm_us[4])
         s->pwm_us[i] = pwm_us[i];
     }
     fc_quat_to_euler(c->ahrs.q_wxyz, s->euler_est_rad);
+    const fc_control_out_t *o = &c->ctl_out;
+    memcpy((unsigned char *)s + FC_STATUS_CTL_OFFSET, o, FC_CTL_REPORT_BYTES);
     for (int i = 0; i < 3; i++) {
-        const fc_pid_info_t *info = &c->pid[i].info;
-        s->att_target_rad[i] = c->att_target_rad[i];
-        s->att_error_frd_rad[i] = c->att_err_frd_rad[i];
-        s->rate_target_frd_rad_s[i] = c->rate_target_frd_rad_s[i];
-        s->rate_frd_rad_s[i] = c->rate_frd_rad_s[i];
-        s->pid_p[i] = info->p_us;
-        s->pid_i[i] = info->i_us;
-        s->pid_d[i] = info->d_us;
-        s->pid_ff[i] = info->ff_us;
-        s->limited[i] = info->limited;
+        s->limited[i] = o->limited[i];
         s->gyro_bias_rad_s[i] = c->ahrs.bias_rad_s[i];
     }
     s->cr_us = c->mixer.roll_us;
@@ -352,10 +378,10 @@ static void fill_status(fc_core_t *c, int64_t tick_ns, const uint16_t pwm_us[4])
     s->alt_est_m = c->alt_est.alt_m;
     s->climb_est_m_s = c->alt_est.climb_m_s;
     s->alt_target_m = (c->in.alt_mode == FC_ALT_MODE_ALTITUDE) ? c->in.alt_target_m : NAN;
-    s->climb_target_m_s = c->alt_ctrl.climb_target_m_s;
-    s->throttle = c->alt_ctrl.throttle;
-    s->trim_us[0] = c->trim_us[0];
-    s->trim_us[1] = c->trim_us[1];
+    s->climb_target_m_s = c->ctl.alt_ctrl.climb_target_m_s;
+    s->throttle = c->ctl.alt_ctrl.throttle;
+    s->trim_us[0] = o->trim_us[0];
+    s->trim_us[1] = o->trim_us[1];
     s->loop_count = c->loop_count;
     s->rejected_count = c->rejected_count;
     s->sat_flags = c->mixer.sat_flags;
@@ -369,21 +395,23 @@ fc_status_t fc_core_pwm_step(fc_core_t *c, int64_t tick_ns, uint16_t pwm_us[FC_M
     const float dt_s = pwm_period_s(c);
     const unsigned ev = fc_spool_update(&c->spool_logic, &c->cfg.spool, &c->in, &c->spool);
     if (ev & FC_SPOOL_EV_ARMING) {
-        fc_control_reset(c, true);
+        control_reset(c, true);
     }
     if (ev & FC_SPOOL_EV_TAKEOFF) {
-        fc_alt_ctrl_reset(&c->alt_ctrl);
+        fc_alt_ctrl_reset(&c->ctl.alt_ctrl); /* the altitude loop from rest */
     }
     fc_state_source_vertical(&c->source, &c->ahrs, &c->alt_est, c->last_imu_ns, &c->state);
     if (fc_spool_detect(&c->spool_logic, &c->cfg.spool, &c->in, &c->state, c->mixer.sat_flags,
-                        c->alt_ctrl.throttle, dt_s, &c->spool)
+                        c->ctl.alt_ctrl.throttle, dt_s, &c->spool)
         & FC_SPOOL_EV_LANDED) {
-        fc_control_reset(c, false);
+        control_reset(c, false);
     }
-    fc_control_throttle_step(c, &c->state, dt_s);
+    fc_control_throttle_step(&c->ctl, &c->cfg.ctl, control_inputs(c), &c->state, dt_s,
+                             &c->ctl_out);
 
-    const fc_status_t st = fc_mixer_update(&c->mixer, &c->cfg.mix, c->spool, c->throttle_us,
-                                           c->cr_us, c->cp_us, c->cy_us, dt_s, pwm_us);
+    const fc_control_out_t *o = &c->ctl_out;
+    const fc_status_t st = fc_mixer_update(&c->mixer, &c->cfg.mix, c->spool, o->throttle_us,
+                                           o->cr_us, o->cp_us, o->cy_us, dt_s, pwm_us);
     fill_status(c, tick_ns, pwm_us);
     c->next_pwm_ns = tick_ns + c->pwm_period_ns;
     c->pwm_count++;

@@ -39,22 +39,18 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "fc_alt_ctrl.h"
 #include "fc_alt_est.h"
 #include "fc_config_map.h"
+#include "fc_control.h"
 #include "fc_gnss_aid.h"
 #include "fc_inputs.h"
 #include "fc_ins.h"
 #include "fc_mahony.h"
 #include "fc_mixer.h"
 #include "fc_params.h"
-#include "fc_rate_pid.h"
-#include "fc_shaper.h"
 #include "fc_spool.h"
 #include "fc_state_source.h"
 #include "fc_status.h"
-#include "fc_sysid.h"
-#include "fc_trim.h"
 #include "fc_vehicle_state.h"
 
 /* One snapshot per PWM tick: what logs, PID_TUNING and tests read. The
@@ -123,13 +119,11 @@ typedef struct fc_core {
     fc_state_source_t source; /* estimate + ground truth -> state */
     fc_vehicle_state_t state; /* what the controllers read */
 
-    /* control */
-    fc_shaper_t shaper;       /* shaped attitude target (input shaping) */
-    fc_rate_pid_t pid[3];
-    fc_trim_t trim;
+    /* control: the control law (its configuration is cfg.ctl), then the mixer */
+    fc_control_state_t ctl;
+    fc_control_in_t ctl_in;   /* refreshed from the fields here before each of its steps */
+    fc_control_out_t ctl_out; /* its latest results: mixer inputs and what the status reports */
     fc_mixer_t mixer;
-    fc_alt_ctrl_t alt_ctrl;
-    fc_sysid_t sysid;         /* SYSTEMID sweep (SID_*) */
     uint8_t spool;            /* fc_spool_t, moved by spool_logic */
     fc_spool_logic_t spool_logic;
 
@@ -139,16 +133,6 @@ typedef struct fc_core {
     float imu_dt_s;           /* IMU period the front-end coefficients use [s] */
     float loop_accum_s;       /* time since the last rate-loop run [s] */
     int64_t next_pwm_ns;
-
-    /* latest rate-loop results */
-    float att_target_rad[3];
-    float att_err_frd_rad[3];
-    float rate_target_frd_rad_s[3];
-    float rate_frd_rad_s[3];  /* the body rates the rate loop used [rad/s] */
-    float pid_out_us[3];      /* rate-loop outputs before a mixer-input sweep [us] */
-    float trim_us[2];
-    float cr_us, cp_us, cy_us;
-    float throttle_us;
 
     uint32_t imu_count, loop_count, pwm_count, rejected_count;
     fc_core_status_t status;

@@ -84,10 +84,10 @@ fc_status_t fc_core_set_accel_ref(fc_core_t *c, const float accel_ned_m_s2[3])
 
 fc_status_t fc_core_sysid_start(fc_core_t *c)
 {
-    return fc_sysid_start(&c->sysid, &c->cfg.sysid, c->last_imu_ns) ? FC_OK : FC_ERR_ARG;
+    return fc_sysid_start(&c->ctl.sysid, &c->cfg.ctl.sysid, c->last_imu_ns) ? FC_OK : FC_ERR_ARG;
 }
 
 void fc_core_sysid_stop(fc_core_t *c)
 {
-    fc_sysid_stop(&c->sysid);
+    fc_sysid_stop(&c->ctl.sysid);
 }

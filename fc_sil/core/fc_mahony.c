@@ -139,26 +139,22 @@ static void integrate_quat(float q[4], const float omega_rad_s[3], float dt_s)
     fc_quat_normalize(q);
 }
 
-fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
-                             const float accel_frd_m_s2[3], float dt_s)
+/* Third row of R(q): body components of NED "down". */
+static void down_in_body(const float q[4], float down_frd[3])
 {
-    if (!fc_finite3(gyro_frd_rad_s) || !fc_finite3(accel_frd_m_s2)) {
-        return FC_ERR_NONFINITE;
-    }
-    if (!(dt_s > 0.0f) || !fc_finitef(dt_s)) {
-        return FC_ERR_ARG;
-    }
-    const fc_mahony_config_t *cfg = &m->cfg;
-    const float *q = m->q_wxyz;
-    /* Third row of R(q): body components of NED "down". */
-    const float down_frd[3] = {2.0f * (q[1] * q[3] - q[0] * q[2]),
-                               2.0f * (q[2] * q[3] + q[0] * q[1]),
-                               1.0f - 2.0f * (q[1] * q[1] + q[2] * q[2])};
+    down_frd[0] = 2.0f * (q[1] * q[3] - q[0] * q[2]);
+    down_frd[1] = 2.0f * (q[2] * q[3] + q[0] * q[1]);
+    down_frd[2] = 1.0f - 2.0f * (q[1] * q[1] + q[2] * q[2]);
+}
 
-    /* (1) tilt error: measured specific-force direction vs. the predicted one:
-     * "up" (gravity alone), or a_ref - g when an acceleration reference is fresh. */
+/* (1) Tilt error e: the measured specific-force direction against the
+ * predicted one, "up" (gravity alone) or a_ref - g while an acceleration
+ * reference is fresh. Returns | |a| - |expected| | / g, the accelerometer's
+ * disagreement that trust and the quasi-static test read (1 when |a| is ~0). */
+static float tilt_error(fc_mahony_t *m, const float down_frd[3], const float accel_frd_m_s2[3],
+                        float dt_s, float e[3])
+{
     const float a_norm = fc_norm3(accel_frd_m_s2);
-    float e[3] = {0.0f, 0.0f, 0.0f};
     float g_ratio_err = 1.0f;
     float expect_frd[3] = {-down_frd[0], -down_frd[1], -down_frd[2]};
     float expect_norm = FC_GRAVITY_M_S2;
@@ -168,7 +164,7 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
         const float n = fc_norm3(f_ned);
         if (n > 0.1f * FC_GRAVITY_M_S2) {
             float f_frd[3];
-            fc_quat_rotate_inv(q, f_ned, f_frd);
+            fc_quat_rotate_inv(m->q_wxyz, f_ned, f_frd);
             for (int i = 0; i < 3; i++) {
                 expect_frd[i] = f_frd[i] / n;
             }
@@ -176,6 +172,9 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
         }
     }
     m->accel_ref_age_s += dt_s;
+    e[0] = 0.0f;
+    e[1] = 0.0f;
+    e[2] = 0.0f;
     if (a_norm > 1e-3f) {
         const float inv = 1.0f / a_norm;
         const float a_dir[3] = {accel_frd_m_s2[0] * inv, accel_frd_m_s2[1] * inv,
@@ -183,8 +182,13 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
         fc_cross3(a_dir, expect_frd, e);
         g_ratio_err = fabsf(a_norm - expect_norm) / FC_GRAVITY_M_S2;
     }
+    return g_ratio_err;
+}
 
-    /* (2) accelerometer trust from the raw |a| (the listing used the normalised one). */
+/* (2) Accelerometer trust from the raw |a| (the listing used the normalised one). */
+static void update_trust(fc_mahony_t *m, float g_ratio_err, float dt_s)
+{
+    const fc_mahony_config_t *cfg = &m->cfg;
     const float span = (cfg->trust_span_g > 1e-3f) ? cfg->trust_span_g : 1e-3f;
     m->trust_raw = fc_constrainf(1.0f - g_ratio_err / span, 0.0f, 1.0f);
     if (cfg->trust_ema_enable) {
@@ -192,17 +196,27 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
     } else {
         m->trust = m->trust_raw;
     }
+}
 
-    /* (3) PI correction: tilt weighted by trust (or the GNSS-aided tilt while
-     * fresh), plus the magnetometer heading. */
-    float kp = cfg->kp, ki = cfg->ki, w = m->trust;
+/* The gains of the tilt correction and the weight on its error. */
+typedef struct tilt_gains {
+    float kp, ki, w;
+} tilt_gains_t;
+
+/* (3a) While a GNSS-aided error is fresh it replaces the accelerometer's e,
+ * with its own scheduled gains and full weight; its down component teaches
+ * the magnetometer's heading offset. */
+static tilt_gains_t gnss_aided_error(fc_mahony_t *m, float dt_s, float e[3])
+{
+    const fc_mahony_config_t *cfg = &m->cfg;
+    tilt_gains_t g = {cfg->kp, cfg->ki, m->trust};
     if (fc_mahony_gnss_active(m)) {
-        fc_quat_rotate_inv(q, m->gnss_err_ned_rad, e);
+        fc_quat_rotate_inv(m->q_wxyz, m->gnss_err_ned_rad, e);
         const fc_aid_sched_config_t sc = {cfg->gnss_boost, cfg->gnss_innov_sigma};
         const float bw = fc_aid_sched_step(&m->gnss_sched, &sc, m->gnss_err_ned_rad, dt_s);
-        kp = cfg->kp_gnss * bw;
-        ki = cfg->ki_gnss * bw * bw; /* KI = w^2: the same damping at s times w */
-        w = 1.0f; /* already free of the vehicle's acceleration: no trust weighting */
+        g.kp = cfg->kp_gnss * bw;
+        g.ki = cfg->ki_gnss * bw * bw; /* KI = w^2: the same damping at s times w */
+        g.w = 1.0f; /* already free of the vehicle's acceleration: no trust weighting */
         if (m->heading_valid && cfg->kmag > 0.0f) {
             /* A positive down component means the estimate's heading is east of
              * true: the magnetometer's reference must turn east too, as it is
@@ -213,13 +227,22 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
         }
     }
     m->gnss_age_s += dt_s;
+    return g;
+}
+
+/* (3b) PI correction corr: the weighted tilt error, plus the magnetometer
+ * heading while fresh; both feed the integrator, which stays within the bias
+ * bound. Returns whether the tilt error was small enough to learn from. */
+static bool pi_correction(fc_mahony_t *m, const tilt_gains_t *g, const float e[3],
+                          const float down_frd[3], float dt_s, float corr[3])
+{
+    const fc_mahony_config_t *cfg = &m->cfg;
     const bool learn = fc_norm3(e) < FC_MAHONY_I_GATE_RAD;
-    float corr[3];
     for (int i = 0; i < 3; i++) {
-        const float ew = w * e[i];
-        corr[i] = kp * ew;
+        const float ew = g->w * e[i];
+        corr[i] = g->kp * ew;
         if (learn) {
-            m->integ_rad_s[i] += ki * ew * dt_s;
+            m->integ_rad_s[i] += g->ki * ew * dt_s;
         }
     }
     if (m->heading_valid && m->heading_age_s < FC_MAHONY_HEADING_STALE_S) {
@@ -231,18 +254,18 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
         }
     }
     m->heading_age_s += dt_s;
-
-    float omega[3];
     for (int i = 0; i < 3; i++) {
         m->integ_rad_s[i] =
             fc_constrainf(m->integ_rad_s[i], -FC_MAHONY_BIAS_MAX_RAD_S, FC_MAHONY_BIAS_MAX_RAD_S);
-        omega[i] = gyro_frd_rad_s[i] - m->bias_rad_s[i] + corr[i] + m->integ_rad_s[i];
     }
+    return learn;
+}
 
-    /* (4) integrate and renormalise. */
-    integrate_quat(m->q_wxyz, omega, dt_s);
-
-    /* (5) quasi-static: hand what the integrator learned to the bias estimate. */
+/* (5) Quasi-static: hand what the integrator learned to the bias estimate. */
+static void hand_over_bias(fc_mahony_t *m, const float gyro_frd_rad_s[3], float g_ratio_err,
+                           bool learn, float dt_s)
+{
+    const fc_mahony_config_t *cfg = &m->cfg;
     const float rate_unbiased[3] = {gyro_frd_rad_s[0] - m->bias_rad_s[0],
                                     gyro_frd_rad_s[1] - m->bias_rad_s[1],
                                     gyro_frd_rad_s[2] - m->bias_rad_s[2]};
@@ -257,6 +280,34 @@ fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
             m->integ_rad_s[i] -= moved;
         }
     }
+}
+
+fc_status_t fc_mahony_update(fc_mahony_t *m, const float gyro_frd_rad_s[3],
+                             const float accel_frd_m_s2[3], float dt_s)
+{
+    if (!fc_finite3(gyro_frd_rad_s) || !fc_finite3(accel_frd_m_s2)) {
+        return FC_ERR_NONFINITE;
+    }
+    if (!(dt_s > 0.0f) || !fc_finitef(dt_s)) {
+        return FC_ERR_ARG;
+    }
+    float down_frd[3];
+    down_in_body(m->q_wxyz, down_frd);
+    float e[3];
+    const float g_ratio_err = tilt_error(m, down_frd, accel_frd_m_s2, dt_s, e);
+    update_trust(m, g_ratio_err, dt_s);
+    const tilt_gains_t g = gnss_aided_error(m, dt_s, e);
+    float corr[3];
+    const bool learn = pi_correction(m, &g, e, down_frd, dt_s, corr);
+
+    /* (4) integrate the corrected, bias-free rate and renormalise. */
+    float omega[3];
+    for (int i = 0; i < 3; i++) {
+        omega[i] = gyro_frd_rad_s[i] - m->bias_rad_s[i] + corr[i] + m->integ_rad_s[i];
+    }
+    integrate_quat(m->q_wxyz, omega, dt_s);
+
+    hand_over_bias(m, gyro_frd_rad_s, g_ratio_err, learn, dt_s);
     return FC_OK;
 }
 

@@ -31,95 +31,127 @@ static float finite_or_zero(float x, bool *bad)
     return x;
 }
 
+/* One flight-band mix in progress: what each priority leaves to the next. */
+typedef struct mix_work {
+    float lo, hi;                /* the flight band (MOT_SPIN_MIN..MAX) [us] */
+    float t;                     /* throttle [us] */
+    float cr, cp, cy;            /* roll, pitch, yaw inputs as they will be applied [us] */
+    float rp[FC_MIXER_MOTORS];   /* roll + pitch part of each motor [us] */
+    float rp_max, rp_min;        /* its extremes [us] */
+    uint8_t flags;               /* FC_SAT_* so far */
+} mix_work_t;
+
+/* Throttle into the band. */
+static void band_throttle(mix_work_t *w, float thr)
+{
+    w->t = thr;
+    if (w->t > w->hi) {
+        w->t = w->hi;
+        w->flags |= FC_SAT_THR_HIGH;
+    } else if (w->t < w->lo) {
+        w->t = w->lo;
+        w->flags |= FC_SAT_THR_LOW;
+    }
+}
+
+/* Roll and pitch first: scale both down together if they need more than the
+ * span; then the throttle gives way so that they fit. */
+static void fit_roll_pitch(mix_work_t *w)
+{
+    const float span = w->hi - w->lo;
+    w->rp_max = -1e30f;
+    w->rp_min = 1e30f;
+    for (int i = 0; i < FC_MIXER_MOTORS; i++) {
+        w->rp[i] = fc_mixer_roll_factor[i] * w->cr + fc_mixer_pitch_factor[i] * w->cp;
+        w->rp_max = fmaxf(w->rp_max, w->rp[i]);
+        w->rp_min = fminf(w->rp_min, w->rp[i]);
+    }
+    if (w->rp_max - w->rp_min > span) {
+        const float scale = span / (w->rp_max - w->rp_min);
+        w->cr *= scale;
+        w->cp *= scale;
+        for (int i = 0; i < FC_MIXER_MOTORS; i++) {
+            w->rp[i] *= scale;
+        }
+        w->rp_max *= scale;
+        w->rp_min *= scale;
+        w->flags |= FC_SAT_ROLL | FC_SAT_PITCH;
+    }
+    const float t_rp = fc_constrainf(w->t, w->lo - w->rp_min, w->hi - w->rp_max);
+    if (t_rp < w->t) {
+        w->flags |= FC_SAT_THR_HIGH;
+    } else if (t_rp > w->t) {
+        w->flags |= FC_SAT_THR_LOW;
+    }
+    w->t = t_rp;
+}
+
+/* Yaw: the room left in the direction each motor is pushed, at least the headroom. */
+static void fit_yaw(mix_work_t *w, float yaw_headroom_us)
+{
+    float room = 1e30f;
+    for (int i = 0; i < FC_MIXER_MOTORS; i++) {
+        const float base = w->t + w->rp[i];
+        const float r = (fc_mixer_yaw_factor[i] * w->cy >= 0.0f) ? w->hi - base : base - w->lo;
+        room = fminf(room, r);
+    }
+    const float yaw_allowed = fmaxf(room, yaw_headroom_us);
+    if (fabsf(w->cy) > yaw_allowed) {
+        w->cy = (w->cy > 0.0f) ? yaw_allowed : -yaw_allowed;
+        w->flags |= FC_SAT_YAW;
+    }
+}
+
+/* The motors: the throttle gives way again for the yaw it had to make room
+ * for, then each output within the band. */
+static void place_motors(fc_mixer_t *m, mix_work_t *w)
+{
+    float m_max = -1e30f, m_min = 1e30f;
+    float mot[FC_MIXER_MOTORS];
+    for (int i = 0; i < FC_MIXER_MOTORS; i++) {
+        mot[i] = w->t + w->rp[i] + fc_mixer_yaw_factor[i] * w->cy;
+        m_max = fmaxf(m_max, mot[i]);
+        m_min = fminf(m_min, mot[i]);
+    }
+    float shift = 0.0f;
+    if (m_max > w->hi && m_min - (m_max - w->hi) >= w->lo) {
+        shift = w->hi - m_max;
+        w->flags |= FC_SAT_THR_HIGH;
+    } else if (m_min < w->lo && m_max + (w->lo - m_min) <= w->hi) {
+        shift = w->lo - m_min;
+        w->flags |= FC_SAT_THR_LOW;
+    }
+    for (int i = 0; i < FC_MIXER_MOTORS; i++) {
+        float v = mot[i] + shift;
+        if (v > w->hi || v < w->lo) {
+            v = fc_constrainf(v, w->lo, w->hi); /* only the yaw headroom can force this */
+            w->flags |= FC_SAT_YAW;
+        }
+        m->motor_us[i] = v;
+    }
+    w->t += shift;
+}
+
 /* Mix in the flight band [lo, hi]; fills m->motor_us and the flags. */
 static void mix_flight(fc_mixer_t *m, const fc_mixer_config_t *cfg, float thr, float cr,
                        float cp, float cy)
 {
     const float range = cfg->pwm_max_us - cfg->pwm_min_us;
-    const float lo = cfg->pwm_min_us + cfg->spin_min * range;
-    const float hi = cfg->pwm_min_us + cfg->spin_max * range;
-    const float span = hi - lo;
-    uint8_t flags = 0;
-
-    float t = thr;
-    if (t > hi) {
-        t = hi;
-        flags |= FC_SAT_THR_HIGH;
-    } else if (t < lo) {
-        t = lo;
-        flags |= FC_SAT_THR_LOW;
-    }
-
-    /* Roll and pitch first: scale both down together if they need more than the span. */
-    float rp[FC_MIXER_MOTORS];
-    float rp_max = -1e30f, rp_min = 1e30f;
-    for (int i = 0; i < FC_MIXER_MOTORS; i++) {
-        rp[i] = fc_mixer_roll_factor[i] * cr + fc_mixer_pitch_factor[i] * cp;
-        rp_max = fmaxf(rp_max, rp[i]);
-        rp_min = fminf(rp_min, rp[i]);
-    }
-    if (rp_max - rp_min > span) {
-        const float scale = span / (rp_max - rp_min);
-        cr *= scale;
-        cp *= scale;
-        for (int i = 0; i < FC_MIXER_MOTORS; i++) {
-            rp[i] *= scale;
-        }
-        rp_max *= scale;
-        rp_min *= scale;
-        flags |= FC_SAT_ROLL | FC_SAT_PITCH;
-    }
-    /* Throttle gives way so that roll and pitch fit. */
-    const float t_rp = fc_constrainf(t, lo - rp_min, hi - rp_max);
-    if (t_rp < t) {
-        flags |= FC_SAT_THR_HIGH;
-    } else if (t_rp > t) {
-        flags |= FC_SAT_THR_LOW;
-    }
-    t = t_rp;
-
-    /* Yaw: the room left in the direction each motor is pushed, at least the headroom. */
-    float room = 1e30f;
-    for (int i = 0; i < FC_MIXER_MOTORS; i++) {
-        const float base = t + rp[i];
-        const float r = (fc_mixer_yaw_factor[i] * cy >= 0.0f) ? hi - base : base - lo;
-        room = fminf(room, r);
-    }
-    const float yaw_allowed = fmaxf(room, cfg->yaw_headroom_us);
-    if (fabsf(cy) > yaw_allowed) {
-        cy = (cy > 0.0f) ? yaw_allowed : -yaw_allowed;
-        flags |= FC_SAT_YAW;
-    }
-
-    /* Throttle gives way again for the yaw it had to make room for. */
-    float m_max = -1e30f, m_min = 1e30f;
-    float mot[FC_MIXER_MOTORS];
-    for (int i = 0; i < FC_MIXER_MOTORS; i++) {
-        mot[i] = t + rp[i] + fc_mixer_yaw_factor[i] * cy;
-        m_max = fmaxf(m_max, mot[i]);
-        m_min = fminf(m_min, mot[i]);
-    }
-    float shift = 0.0f;
-    if (m_max > hi && m_min - (m_max - hi) >= lo) {
-        shift = hi - m_max;
-        flags |= FC_SAT_THR_HIGH;
-    } else if (m_min < lo && m_max + (lo - m_min) <= hi) {
-        shift = lo - m_min;
-        flags |= FC_SAT_THR_LOW;
-    }
-    for (int i = 0; i < FC_MIXER_MOTORS; i++) {
-        float v = mot[i] + shift;
-        if (v > hi || v < lo) {
-            v = fc_constrainf(v, lo, hi); /* only the yaw headroom can force this */
-            flags |= FC_SAT_YAW;
-        }
-        m->motor_us[i] = v;
-    }
-    m->throttle_us = t + shift;
-    m->roll_us = cr;
-    m->pitch_us = cp;
-    m->yaw_us = cy;
-    m->sat_flags = flags;
+    mix_work_t w = {0};
+    w.lo = cfg->pwm_min_us + cfg->spin_min * range;
+    w.hi = cfg->pwm_min_us + cfg->spin_max * range;
+    w.cr = cr;
+    w.cp = cp;
+    w.cy = cy;
+    band_throttle(&w, thr);
+    fit_roll_pitch(&w);
+    fit_yaw(&w, cfg->yaw_headroom_us);
+    place_motors(m, &w);
+    m->throttle_us = w.t;
+    m->roll_us = w.cr;
+    m->pitch_us = w.cp;
+    m->yaw_us = w.cy;
+    m->sat_flags = w.flags;
 }
 
 /* Largest step of one output in dt for a full-range transition time; 0 = none. */

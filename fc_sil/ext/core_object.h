@@ -3,9 +3,9 @@
  *
  * The extension is one file per concept: core_object.c (life cycle, parameters, the
  * host's inputs), core_steps.c (single steps and the reads of state, for hosts and
- * tests without records), core_batch.c (record batches: the only place records meet
- * the core), core_log.c (log capture into bytearrays), corepoll.c (the whole FC poll
- * over the shared-memory rings), sysidmethods.c (system identification),
+ * tests without records), record_batch.c (record batches: the only place records meet
+ * the core), core_log.c (log capture into bytearrays), record_router.c (the record
+ * router: the whole FC poll over the shared-memory rings), sysidmethods.c (system identification),
  * core_layout.c and core_bench.c (module functions), coremodule.c (the type and the
  * module). Each file exports its NULL-terminated method table; coremodule.c joins them.
  *
@@ -35,7 +35,9 @@ enum {
     FC_IO_N_LATENCY,       /* samples written to each statistics ring */
     FC_IO_N_PERIOD,
     FC_IO_N_E2E,
-    FC_IO_WORDS
+    FC_IO_TIMING,          /* 5 words: the last poll's /timing row (sim, imu wall, consume,
+                            * pwm wall, period [ns]), for a per-cycle sink (fc_loop.py) */
+    FC_IO_WORDS = FC_IO_TIMING + 5
 };
 
 typedef struct fc_io_t {
@@ -74,7 +76,7 @@ typedef struct CoreObject {
     int log_pwm;
     int log_on;               /* any record queue bound */
     PyObject *log_timing;     /* bytearray: the /timing channel's queue (poll_io rows) */
-    fc_io_t io;               /* attach_io(): the shared-memory poll loop in C (corepoll.c) */
+    fc_io_t io;               /* attach_io(): the shared-memory poll loop in C (record_router.c) */
 } CoreObject;
 
 /* core_object.c: construction and clean-up (the type's tp_new and tp_dealloc). */
@@ -86,7 +88,7 @@ int64_t fc_ext_monotonic_ns(void);
 /* core_steps.c */
 extern PyMethodDef fc_ext_step_methods[];
 
-/* core_batch.c: consume n records at base; PWM records and status rows to the outputs
+/* record_batch.c: consume n records at base; PWM records and status rows to the outputs
  * (cap rows); returns the PWM ticks emitted, or -1 with an exception set. */
 extern PyMethodDef fc_ext_batch_methods[];
 Py_ssize_t fc_ext_run_records(CoreObject *self, const unsigned char *base, Py_ssize_t n,
@@ -104,7 +106,7 @@ int fc_ext_log_batch(CoreObject *self, const unsigned char *recs, Py_ssize_t n,
                      const unsigned char *pwm, const fc_core_status_t *status, Py_ssize_t k);
 void fc_ext_clear_log(CoreObject *self);
 
-/* corepoll.c: Core methods attach_io, poll_io; and the clean-up. */
+/* record_router.c: Core methods attach_io, poll_io; and the clean-up. */
 extern PyMethodDef fc_ext_poll_methods[];
 void fc_ext_detach_io(CoreObject *self);
 

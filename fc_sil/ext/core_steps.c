@@ -2,7 +2,7 @@
  * core_steps.c - the core one call at a time, and what the host reads back.
  *
  * Single steps (imu, baro, mag, gt_att, gt_nav, pwm_due, pwm_step) serve tests and hosts
- * that have no records; the flight loop uses record batches (core_batch.c). The reads
+ * that have no records; the flight loop uses record batches (record_batch.c). The reads
  * (status_bytes, counters, inputs, gnss, last_seen, take_accel_mean) are what the
  * host's supervisor, telemetry and pre-arm checks look at between polls.
  */

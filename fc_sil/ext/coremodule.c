@@ -2,9 +2,9 @@
  * coremodule.c - silbridge.fc_sil._core: the C flight-controller core driven from
  * Python. This file only assembles the module: the Core type, whose methods are the
  * tables of the files that implement them (core_object.h lists the files), the module
- * functions, and the status codes as constants. The per-block test bindings are a
- * module of their own (fc_sil/ext/blocks/, silbridge.fc_sil._blocks), so a flight
- * carries none of them.
+ * functions, and the status codes as constants. The per-block test bindings are
+ * generated from the core's headers by the tests (tests/fc_sil/core_cffi.py), so a
+ * flight carries none of them.
  */
 #include "core_object.h"
 

@@ -28,16 +28,17 @@ static PyObject *Core_sysid_sample(CoreObject *self, PyObject *noargs)
 {
     (void)noargs;
     const fc_core_t *c = &self->core;
-    const fc_sysid_t *s = &c->sysid;
+    const fc_sysid_t *s = &c->ctl.sysid;
+    const fc_control_out_t *o = &c->ctl_out; /* the control law's latest step */
     return Py_BuildValue("(LiidddI" "ddd" "ddd" "ddd" "ddd)", (long long)c->last_imu_ns,
                          (int)s->active, (int)s->axis, (double)s->t_s, (double)s->sample,
                          (double)s->freq_hz, (unsigned int)s->runs,
-                         (double)c->rate_target_frd_rad_s[0], (double)c->rate_target_frd_rad_s[1],
-                         (double)c->rate_target_frd_rad_s[2], (double)c->rate_frd_rad_s[0],
-                         (double)c->rate_frd_rad_s[1], (double)c->rate_frd_rad_s[2],
-                         (double)c->pid_out_us[0], (double)c->pid_out_us[1],
-                         (double)c->pid_out_us[2], (double)c->cr_us, (double)c->cp_us,
-                         (double)c->cy_us);
+                         (double)o->rate_target_frd_rad_s[0], (double)o->rate_target_frd_rad_s[1],
+                         (double)o->rate_target_frd_rad_s[2], (double)o->rate_frd_rad_s[0],
+                         (double)o->rate_frd_rad_s[1], (double)o->rate_frd_rad_s[2],
+                         (double)o->pid_out_us[0], (double)o->pid_out_us[1],
+                         (double)o->pid_out_us[2], (double)o->cr_us, (double)o->cp_us,
+                         (double)o->cy_us);
 }
 
 PyMethodDef fc_ext_sysid_methods[] = {

@@ -1,6 +1,6 @@
 """HilBridgeEnd: the bridge's side of the HIL transport, with the Segment surface it uses.
 
-The bridge loop (bridge/runner.py, runner_main.py) talks to a Segment: sensors.push_batch,
+The bridge loop (bridge/bridge_loop.py, bridge_driver.py) talks to a Segment: sensors.push_batch,
 actuators.pop_into, the lockstep words, peer liveness. This class offers the same surface over
 MAVLink 2 HIL messages, so lockstep, real time, the start-up checks, the trace hash and the
 logs are the same code whatever the transport. The lockstep words map onto the protocol:

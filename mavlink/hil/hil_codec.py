@@ -44,21 +44,29 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 from silbridge.shm.records import (
     BARO_DTYPE,
     FLAG_STEP_END,
+    FLAGS_OFFSET,
     GNSS_DTYPE,
     GT_ATT_DTYPE,
     GT_NAV_DTYPE,
     IMU_DTYPE,
+    KIND_BARO,
+    KIND_GNSS,
+    KIND_GT_ATT,
+    KIND_GT_NAV,
+    KIND_IMU,
+    KIND_MAG,
+    KIND_SETPOINT,
     MAG_DTYPE,
-    RECORD_SIZE,
     SETPOINT_DTYPE,
     Kind,
+    record_struct,
 )
 
 from silbridge.mavlink.hil.hil_errors import HilInputError
 from silbridge.mavlink.v2_frames import V2Frames
+from silbridge.shm.records import NS_PER_S as _NS
 
 _G0 = 9.80665
-_NS = 1_000_000_000
 _M_PER_DEG = 6378137.0 * math.pi / 180.0     # spherical metres per degree (north/east, lossy)
 _LOW24 = (1 << 24) - 1
 _LOW48 = (1 << 48) - 1
@@ -81,23 +89,21 @@ POS_IGNORE_Z = 0x4
 POS_IGNORE_YAW = 0x400
 MAV_FRAME_LOCAL_NED = 1
 
-_IMU = int(Kind.IMU)
-_BARO = int(Kind.BARO)
-_MAG = int(Kind.MAG)
-_GNSS = int(Kind.GNSS)
-_GT_ATT = int(Kind.GT_ATT)
-_GT_NAV = int(Kind.GT_NAV)
-_SETPOINT = int(Kind.SETPOINT)
+# The records of one step other than IMU samples, by kind: the view that reads each.
+_STEP_VIEWS = {KIND_BARO: BARO_DTYPE, KIND_MAG: MAG_DTYPE, KIND_GNSS: GNSS_DTYPE,
+               KIND_SETPOINT: SETPOINT_DTYPE, KIND_GT_ATT: GT_ATT_DTYPE, KIND_GT_NAV: GT_NAV_DTYPE}
 
-_HDR = "<HHIqq"
-_S_IMU = struct.Struct(_HDR + "3f3ffIII")
-_S_BARO = struct.Struct(_HDR + "ff32x")
-_S_MAG = struct.Struct(_HDR + "3f28x")
-_S_GNSS = struct.Struct(_HDR + "iii3fHHBB10x")
-_S_GT_ATT = struct.Struct(_HDR + "4f3f3f")
-_S_GT_NAV = struct.Struct(_HDR + "3d3fB3x")
-_S_SETPOINT = struct.Struct(_HDR + "4fI20x")
+# Whole 64-byte slots, packed field by field in slot order (shm/records.py declares them).
+_S_IMU, _S_BARO, _S_MAG, _S_GNSS, _S_GT_ATT, _S_GT_NAV, _S_SETPOINT = (record_struct(k) for k in (
+    Kind.IMU, Kind.BARO, Kind.MAG, Kind.GNSS, Kind.GT_ATT, Kind.GT_NAV, Kind.SETPOINT))
 _F32 = struct.Struct("<f")
+
+# Message ids the FC side dispatches on (the dialect's numbers, not retyped).
+_ID_HIL_SENSOR = mav.MAVLINK_MSG_ID_HIL_SENSOR
+_ID_HIL_STATE_QUATERNION = mav.MAVLINK_MSG_ID_HIL_STATE_QUATERNION
+_ID_HIL_GPS = mav.MAVLINK_MSG_ID_HIL_GPS
+_ID_SET_ATTITUDE_TARGET = mav.MAVLINK_MSG_ID_SET_ATTITUDE_TARGET
+_ID_SET_POSITION_TARGET_LOCAL_NED = mav.MAVLINK_MSG_ID_SET_POSITION_TARGET_LOCAL_NED
 
 
 def f32(x: float) -> float:
@@ -150,22 +156,15 @@ class SensorEncoder:
 
     def _step(self, recs, kinds, wall_ns: int, out: list) -> None:
         lo, hi = wall_fields(wall_ns)
-        imu_idx = np.flatnonzero(kinds == _IMU)
-        baro = mag = gnss = sp = att = nav = None
-        for i in np.flatnonzero(kinds != _IMU).tolist():
+        imu_idx = np.flatnonzero(kinds == KIND_IMU)
+        found = {}                  # kind -> the step's (last) record of it
+        for i in np.flatnonzero(kinds != KIND_IMU).tolist():
             k = int(kinds[i])
-            if k == _BARO:
-                baro = recs[i:i + 1].view(BARO_DTYPE)[0]
-            elif k == _MAG:
-                mag = recs[i:i + 1].view(MAG_DTYPE)[0]
-            elif k == _GNSS:
-                gnss = recs[i:i + 1].view(GNSS_DTYPE)[0]
-            elif k == _SETPOINT:
-                sp = recs[i:i + 1].view(SETPOINT_DTYPE)[0]
-            elif k == _GT_ATT:
-                att = recs[i:i + 1].view(GT_ATT_DTYPE)[0]
-            elif k == _GT_NAV:
-                nav = recs[i:i + 1].view(GT_NAV_DTYPE)[0]
+            view = _STEP_VIEWS.get(k)
+            if view is not None:
+                found[k] = recs[i:i + 1].view(view)[0]
+        baro, mag, gnss = found.get(KIND_BARO), found.get(KIND_MAG), found.get(KIND_GNSS)
+        sp, att, nav = found.get(KIND_SETPOINT), found.get(KIND_GT_ATT), found.get(KIND_GT_NAV)
         step_us = int(recs["sim_ns"][-1]) // 1000
         n = 0
         if sp is not None:
@@ -300,16 +299,16 @@ class SensorDecoder:
 
     def feed(self, msg, now_ns: int) -> bytes:
         mid = msg.get_msgId()
-        if mid == 107:      # HIL_SENSOR
+        if mid == _ID_HIL_SENSOR:
             self._sensor(msg, now_ns)
             return b"" if self.silbridge_peer else self._close_step(msg.time_usec * 1000, None)
-        if mid == 115:      # HIL_STATE_QUATERNION
+        if mid == _ID_HIL_STATE_QUATERNION:
             return self._state(msg, now_ns)
-        if mid == 113:      # HIL_GPS
+        if mid == _ID_HIL_GPS:
             self._gnss = msg
-        elif mid == 82:     # SET_ATTITUDE_TARGET
+        elif mid == _ID_SET_ATTITUDE_TARGET:
             self._att_sp = msg
-        elif mid == 84:     # SET_POSITION_TARGET_LOCAL_NED
+        elif mid == _ID_SET_POSITION_TARGET_LOCAL_NED:
             self._pos_sp = msg
         return b""
 
@@ -372,16 +371,17 @@ class SensorDecoder:
                 t_exact = ((m0 + j) * _NS) // imu_hz
                 if t_exact // 1000 == t_ns // 1000:
                     t_ns = t_exact
-            out.append(_S_IMU.pack(_IMU, 0, self._next(_IMU), t_ns, wall, ax, ay, az, gx, gy, gz,
-                                   temp, j, n, 0))
+            out.append(_S_IMU.pack(KIND_IMU, 0, self._next(KIND_IMU), t_ns, wall, ax, ay, az,
+                                   gx, gy, gz, temp, j, n, 0))
         self._imu = []
         if state is not None:
             out.extend(self._gt(state, step_ns, wall))
         if self._baro is not None:
-            out.append(_S_BARO.pack(_BARO, 0, self._next(_BARO), step_ns, wall, *self._baro))
+            out.append(_S_BARO.pack(KIND_BARO, 0, self._next(KIND_BARO), step_ns, wall,
+                                    *self._baro))
             self._baro = None
         if self._mag is not None:
-            out.append(_S_MAG.pack(_MAG, 0, self._next(_MAG), step_ns, wall, *self._mag))
+            out.append(_S_MAG.pack(KIND_MAG, 0, self._next(KIND_MAG), step_ns, wall, *self._mag))
             self._mag = None
         if self._gnss is not None:
             out.append(self._gnss_record(self._gnss, step_ns, wall))
@@ -392,7 +392,7 @@ class SensorDecoder:
             return b""
         if end:
             last = bytearray(out[-1])
-            last[2] |= FLAG_STEP_END
+            last[FLAGS_OFFSET] |= FLAG_STEP_END      # the u16's low byte (little-endian)
             out[-1] = bytes(last)
         return b"".join(out)
 
@@ -406,13 +406,13 @@ class SensorDecoder:
         pd = (alt0 - m.alt) / 1000.0
         sf = [a * _G0 / 1000.0 for a in (m.xacc, m.yacc, m.zacc)]
         q = m.attitude_quaternion
-        return [_S_GT_ATT.pack(_GT_ATT, 0, self._next(_GT_ATT), step_ns, wall, q[0], q[1], q[2],
-                               q[3], m.rollspeed, m.pitchspeed, m.yawspeed, *sf),
-                _S_GT_NAV.pack(_GT_NAV, 0, self._next(_GT_NAV), step_ns, wall, pn, pe, pd,
+        return [_S_GT_ATT.pack(KIND_GT_ATT, 0, self._next(KIND_GT_ATT), step_ns, wall, q[0], q[1],
+                               q[2], q[3], m.rollspeed, m.pitchspeed, m.yawspeed, *sf),
+                _S_GT_NAV.pack(KIND_GT_NAV, 0, self._next(KIND_GT_NAV), step_ns, wall, pn, pe, pd,
                                m.vx / 100.0, m.vy / 100.0, m.vz / 100.0, 0)]
 
     def _gnss_record(self, g, step_ns: int, wall: int) -> bytes:
-        return _S_GNSS.pack(_GNSS, 0, self._next(_GNSS), step_ns, wall, g.lat, g.lon, g.alt,
+        return _S_GNSS.pack(KIND_GNSS, 0, self._next(KIND_GNSS), step_ns, wall, g.lat, g.lon, g.alt,
                             g.vn / 100.0, g.ve / 100.0, g.vd / 100.0, g.eph, g.epv, g.fix_type,
                             g.satellites_visible)
 
@@ -433,8 +433,5 @@ class SensorDecoder:
             if not p.type_mask & POS_IGNORE_YAW:
                 mask |= 4
                 yaw = p.yaw
-        return _S_SETPOINT.pack(_SETPOINT, 0, self._next(_SETPOINT), step_ns, wall, roll, pitch,
-                                yaw, alt, mask)
-
-
-assert _S_IMU.size == _S_BARO.size == _S_GT_NAV.size == _S_SETPOINT.size == RECORD_SIZE
+        return _S_SETPOINT.pack(KIND_SETPOINT, 0, self._next(KIND_SETPOINT), step_ns, wall, roll,
+                                pitch, yaw, alt, mask)

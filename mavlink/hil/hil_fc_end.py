@@ -1,7 +1,8 @@
 """HilFcEnd: the SIL FC's side of the HIL transport, with the Segment surface it uses.
 
-fc_sil/runtime.py (FcLoop.poll, run_fc) reads sensors with sensors.pop_into / wait, publishes
-PWM with actuators.push_batch and answers lockstep through set_word(FC_SIM_NS). Here the same
+fc_sil/fc_loop.py (FcLoop.poll, run_fc; the surface is fc_sil/fc_transport.py FcTransport) reads
+sensors with sensors.pop_into / wait, publishes PWM with actuators.push_batch and answers
+lockstep through set_word(FC_SIM_NS); c_capsule() is None, so it polls in Python. Here the same
 calls speak MAVLink (see hil_bridge_end.py for the word <-> message mapping):
 
   connect      TCP to the simulator (retrying) or UDP to its address; then the hello:
@@ -252,6 +253,9 @@ class HilFcEnd:
             self.channel.send([c.named_value_int_encode(0, b"SB_FC", int(value)).pack(c)])
         elif i == ls.FC_STOP and value:
             self.channel.send([c.named_value_int_encode(0, b"SB_FCSTOP", 1).pack(c)])
+
+    def c_capsule(self) -> None:
+        return None     # records cross in Python (MAVLink): the FC loop polls in Python
 
     def word(self, i: int) -> int:
         if i == ls.STOP:

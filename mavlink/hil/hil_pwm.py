@@ -22,9 +22,7 @@ the acknowledgement; older ticks of the same step are superseded and counted).
 
 from __future__ import annotations
 
-import struct
-
-from silbridge.shm.records import RECORD_SIZE, Kind
+from silbridge.shm.records import KIND_PWM, Kind, record_struct
 
 FLAG_LOCKSTEP = 1
 FLAG_SB_EXT = 1 << 32
@@ -35,9 +33,8 @@ IS_ACK = 2
 MOTORS = 4
 _SPAN_NS = 1 << 24
 
-_PWM = struct.Struct("<HHIqq8HBBHIq8x")
-assert _PWM.size == RECORD_SIZE
-_PWM_IN = struct.Struct("<HHIqq8HBBHIq")    # reads the first 56 bytes of a PWM record
+_PWM = record_struct(Kind.PWM)       # the whole 64-byte PWM slot (shm/records.py)
+_SIM_NS = record_struct(Kind.PWM, ["sim_ns"])    # a PWM record's tick
 
 
 def _norm(pwm_us: int) -> float:
@@ -65,7 +62,7 @@ class PwmEncoder:
         kind_bits = 0
         if rec is not None:
             (_, _, seq, sim_ns, _, p0, p1, p2, p3, _, _, _, _, count, armed, _, step_seq,
-             imu_ns) = _PWM_IN.unpack(rec[:56])
+             imu_ns) = _PWM.unpack_from(rec)
             kind_bits |= HAS_PWM
             self.next_seq = (seq + 1) & 0xFFFFFFFF
             controls[0:4] = [_norm(p0), _norm(p1), _norm(p2), _norm(p3)]
@@ -97,12 +94,12 @@ class PwmEncoder:
             self.superseded += len(pending) - 1     # another simulator wants one per step
             pending = pending[-1:]
         if ack_ns is not None and pending:
-            tick = struct.unpack_from("<q", pending[-1], 8)[0]
+            tick = _SIM_NS.unpack_from(pending[-1])[0]
             if 0 <= ack_ns - tick < _SPAN_NS:
                 merge = pending[-1]
                 pending = pending[:-1]
         for rec in pending:
-            tick = struct.unpack_from("<q", rec, 8)[0]
+            tick = _SIM_NS.unpack_from(rec)[0]
             out.append(self._frame(tick // 1000, rec, None))
             n += 1
         if ack_ns is not None:
@@ -139,7 +136,7 @@ class PwmDecoder:
         armed = 1 if m.mode & MODE_SAFETY_ARMED else 0
         pwm = [_pwm_us(c[i]) for i in range(MOTORS)]
         if not m.flags & FLAG_SB_EXT:
-            rec = _PWM.pack(int(Kind.PWM), 0, self.seq & 0xFFFFFFFF, t_ns, now_ns, *pwm, 0, 0, 0, 0,
+            rec = _PWM.pack(KIND_PWM, 0, self.seq & 0xFFFFFFFF, t_ns, now_ns, *pwm, 0, 0, 0, 0,
                             MOTORS, armed, 0, 0, t_ns)
             self.seq += 1
             return rec, t_ns
@@ -156,6 +153,6 @@ class PwmDecoder:
         imu_ns = tick + int(c[14]) if c[14] >= 0 else tick
         count = int(c[15])
         pwm += [0] * 4
-        rec = _PWM.pack(int(Kind.PWM), 0, seq, tick, now_ns, *pwm, count, armed, 0, step_seq,
+        rec = _PWM.pack(KIND_PWM, 0, seq, tick, now_ns, *pwm, count, armed, 0, step_seq,
                         imu_ns)
         return rec, ack

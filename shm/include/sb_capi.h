@@ -1,6 +1,6 @@
 /*
  * sb_capi.h - the shared-memory segment for another C extension (fc_sil's
- * Core.attach_io): Segment._c_api() hands out a PyCapsule named
+ * Core.attach_io): Segment.c_capsule() hands out a PyCapsule named
  * SB_CAPI_CAPSULE holding an sb_capi, so a consumer loop can pop, push and set
  * lockstep words without a Python call per operation.
  *

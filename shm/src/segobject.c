@@ -112,8 +112,8 @@ static void capi_free(PyObject *capsule)
     Py_XDECREF((PyObject *)PyCapsule_GetContext(capsule));
 }
 
-/* _c_api() -> capsule for other C extensions (sb_capi.h). */
-static PyObject *Seg_c_api(SegmentObject *self, PyObject *Py_UNUSED(ignored))
+/* c_capsule() -> the segment for other C extensions (sb_capi.h); fc_sil/fc_transport.py. */
+static PyObject *Seg_c_capsule(SegmentObject *self, PyObject *Py_UNUSED(ignored))
 {
     if (sb_check_open(self)) return NULL;
     sb_capi *api = PyMem_Malloc(sizeof *api);
@@ -318,8 +318,8 @@ static PyMethodDef Seg_methods[] = {
      "close(): unmap and mark this side closed (idempotent)."},
     {"unlink", (PyCFunction)Seg_unlink, METH_NOARGS,
      "unlink(): owner only; remove the name if it still refers to this segment."},
-    {"_c_api", (PyCFunction)Seg_c_api, METH_NOARGS,
-     "_c_api() -> capsule: the segment for another C extension (shm/include/sb_capi.h)."},
+    {"c_capsule", (PyCFunction)Seg_c_capsule, METH_NOARGS,
+     "c_capsule() -> capsule: the segment for another C extension (shm/include/sb_capi.h)."},
     {"beat", (PyCFunction)Seg_beat, METH_NOARGS,
      "beat() -> int: bump this side's heartbeat counter."},
     {"peer_heartbeat", (PyCFunction)Seg_peer_heartbeat, METH_NOARGS,

@@ -20,9 +20,10 @@ import threading
 
 import pytest
 
-from silbridge.bridge import ardupilot_json as apj
-from silbridge.bridge.ardupilot_physics import ArduPilotPhysics, euler_from_quat
-from silbridge.bridge.ardupilot_server import JsonPhysicsServer, SitlLost, parse_address
+from silbridge.bridge.autopilots.ardupilot import json_protocol as apj
+from silbridge.bridge.autopilots.ardupilot.physics import ArduPilotPhysics
+from silbridge.bridge.frames import euler_from_quat
+from silbridge.bridge.autopilots.ardupilot.server import JsonPhysicsServer, SitlLost, parse_address
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 

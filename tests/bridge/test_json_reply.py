@@ -1,7 +1,7 @@
 """The C reply line of the ArduPilot JSON physics against its Python reference.
 
 `_step.json_reply` (bridge/src/step_json.c) is what the hot path sends SITL;
-`ardupilot_physics.reply_line` is the readable reference. Both are fed the same
+`reply_line` (tests/bridge/json_reply_oracle.py) is the readable reference. Both are fed the same
 records of real JSBSim steps (hover, doublets, a climb, an 8 kHz IMU averaged per
 step, a 500 Hz IMU that leaves steps without a sample) and must give the same
 bytes on x86-64 (CPython formats the numbers in both); elsewhere the values must
@@ -17,12 +17,14 @@ import platform
 import numpy as np
 import pytest
 
-from silbridge.bridge import ardupilot_json as apj
+from silbridge.bridge.autopilots.ardupilot import json_protocol as apj
 from silbridge.bridge._step import json_reply
-from silbridge.bridge.ardupilot_physics import ArduPilotPhysics, reply_line
+from silbridge.bridge.autopilots.ardupilot.physics import ArduPilotPhysics
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 from silbridge.shm.records import Kind
+
+from json_reply_oracle import reply_line  # tests/bridge/ is on sys.path (conftest.py)
 
 _EXACT = platform.machine() in ("x86_64", "AMD64")
 

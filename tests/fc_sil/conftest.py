@@ -1,9 +1,16 @@
-"""Record builders shared by the FlightCore tests (real shm record dtypes)."""
+"""Record builders shared by the FlightCore tests (real shm record dtypes); this folder on
+sys.path, so its tests import the block bindings (fc_blocks.py) by name (--import-mode=importlib)."""
+
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from silbridge.shm import records as R
+
+if str(Path(__file__).resolve().parent) not in sys.path:
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 G = 9.80665
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from silbridge.fc_sil import blocks as B
+import fc_blocks as B
 
 DT = 0.001
 

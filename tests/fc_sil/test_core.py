@@ -215,6 +215,26 @@ def test_status_snapshot_and_reset(stream):
     assert fc.get_param("ATC_RAT_RLL_P") == pytest.approx(0.135)
 
 
+def test_the_status_carries_the_control_laws_latest_step(stream):
+    # fill_status copies the control law's report in one piece: each field must land in its
+    # own status field. The batch ends on a PWM tick right after a rate-loop step, so the
+    # status and the law's outputs (sysid_sample reads them directly) are the same step.
+    fc = FlightCore()
+    fc.arm()
+    fc.set_attitude_target(0.1, -0.05)
+    fc.step_batch(stream().batch(2001, gyro=(0.02, -0.01, 0.03)))   # IMU 0..2000 ms
+    st, sample = fc.status(), fc.sysid_sample()
+    assert st["sim_ns"] == sample[0] == 2_000_000_000
+    np.testing.assert_array_equal(st["rate_target_frd_rad_s"], np.float32(sample[7:10]))
+    np.testing.assert_array_equal(st["rate_frd_rad_s"], np.float32(sample[10:13]))
+    pid_sum = st["pid_p"] + st["pid_i"] + st["pid_d"] + st["pid_ff"]
+    np.testing.assert_allclose(pid_sum, np.float32(sample[13:16]), rtol=1e-6, atol=1e-6)
+    assert np.all(st["pid_p"] != 0.0)
+    # the shaped target has reached the command; the error is what the state lacks of it
+    np.testing.assert_allclose(st["att_target_rad"][:2], [0.1, -0.05], atol=1e-3)
+    assert st["att_error_frd_rad"][0] > 0.05 and st["att_error_frd_rad"][1] < -0.02
+
+
 def test_gyro_bias_is_learned_on_the_ground_and_removed_from_the_rate_loop(stream):
     # Disarmed and still, the estimator runs its fast ground gains: a 0.05 rad/s
     # bias is learned within seconds, and the rate loop sees the corrected rate.

@@ -1,6 +1,6 @@
 """fc_filter.c: PT1, PT2, PT2x2, biquad low-pass and notch against scipy.signal.
 
-Every filter is run through the real C code (silbridge.fc_sil.blocks). Its
+Every filter is run through the real C code (fc_blocks.py, cffi bindings). Its
 impulse response must equal scipy's for the design fc_filter.h documents, and
 its gain and phase, measured from a steady sine, must match scipy.freqz.
 """
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from silbridge.fc_sil import blocks as B
+import fc_blocks as B
 
 FS = 1000.0
 
@@ -133,7 +133,7 @@ def test_changing_the_cutoff_keeps_the_state(kind, cutoff, bw):
 @pytest.mark.parametrize("factory", [lambda: B.PT1(0, FS), lambda: B.PT2(0, FS),
                                      lambda: B.PT2x2(0, FS), lambda: B.BiquadLowPass(0, FS),
                                      lambda: B.Notch(0, 40, FS),
-                                     lambda: B.Filter(B.FILTER_NONE, 20, FS)])
+                                     lambda: B.Filter(B.lib.FC_FILTER_NONE, 20, FS)])
 def test_cutoff_zero_is_pass_through(factory):
     x = np.random.default_rng(1).normal(size=300).astype(np.float32)
     np.testing.assert_array_equal(factory().apply(x), x)

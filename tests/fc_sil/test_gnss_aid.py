@@ -11,7 +11,7 @@ through FlightCore.step_batch as the shared-memory ring delivers them.
 import numpy as np
 import pytest
 
-from silbridge.fc_sil import blocks as B
+import fc_blocks as B
 from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.shm import records as R
 

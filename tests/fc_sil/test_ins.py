@@ -3,7 +3,7 @@
 import numpy as np
 from scipy import signal
 
-from silbridge.fc_sil import blocks as B
+import fc_blocks as B
 
 FS = 1000.0
 G = np.array([0.0, 0.0, -9.80665])

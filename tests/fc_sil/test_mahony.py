@@ -7,7 +7,7 @@ the real C estimator at 1 kHz.
 import numpy as np
 import pytest
 
-from silbridge.fc_sil import blocks as B
+import fc_blocks as B
 
 DT = 0.001
 G = 9.80665

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from silbridge.fc_sil import blocks as B
+import fc_blocks as B
 from silbridge.fc_sil.status import SAT_PITCH, SAT_ROLL, SAT_THR_HIGH, SAT_THR_LOW, SAT_YAW
 
 

@@ -175,10 +175,11 @@ def test_param_doc_is_up_to_date():
 
 
 def test_block_defaults_are_the_declared_defaults():
-    """fc_sil/blocks.py takes its defaults from the declaration, never its own numbers."""
+    """The block wrappers (tests/fc_sil/fc_blocks.py) take their defaults from the
+    declaration, never their own numbers."""
     import inspect
 
-    from silbridge.fc_sil import blocks as B
+    import fc_blocks as B
     d = {p.name: p.default for p in P.PARAMS}
     pid = inspect.signature(B.RatePID).parameters
     assert pid["fltt_hz"].default == d["ATC_RAT_RLL_FLTT"]

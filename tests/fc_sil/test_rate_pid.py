@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from silbridge.fc_sil import blocks as B
+import fc_blocks as B
 
 LOOP_HZ = 1000.0
 P, I, D, FF, OUT, LIMITED, DCLAMPED = range(7)

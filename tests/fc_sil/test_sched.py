@@ -18,7 +18,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 import test_alt as A  # noqa: E402  (the vertical plant)
 import test_gnss_aid as T  # noqa: E402  (the synthetic aided flight)
 
-from silbridge.fc_sil import blocks as B  # noqa: E402
+import fc_blocks as B  # noqa: E402
 from silbridge.fc_sil.flight_core import FlightCore  # noqa: E402
 
 G = 9.80665

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from silbridge.fc_sil import blocks as B
+import fc_blocks as B
 from silbridge.fc_sil.flight_core import FlightCore
 
 LOOP_HZ = 8000.0

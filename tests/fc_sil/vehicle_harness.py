@@ -11,9 +11,9 @@ from __future__ import annotations
 import math
 import os
 
-from silbridge.bridge.runner_main import prepare_segment, run_bridge
+from silbridge.bridge.bridge_driver import prepare_segment, run_bridge
 from silbridge.fc_sil.flight_core import FlightCore
-from silbridge.fc_sil.runtime import FcLoop
+from silbridge.fc_sil.fc_loop import FcLoop
 from silbridge.fc_sil.vehicle import Vehicle
 from silbridge.shm import Segment
 from silbridge.tools.loop.flight import FlightOptions, bridge_config, make_simulator
@@ -89,36 +89,23 @@ def fly_scripted(script, *, duration_s: float, scenario: str = "S1", params: dic
     return flight, res
 
 
-class _DroppingC:
-    """Wraps the C Core: step_batch (and FcLoop's bind_batch/step_bound) drop one record
-    kind from a given sim time."""
-
-    def __init__(self, c, kind: int, after_ns: int):
-        self._c, self.kind, self.after_ns = c, kind, after_ns
-        self._bound = None
-
-    def bind_batch(self, records, pwm_out, status_out):
-        self._bound = (records, pwm_out, status_out)
-
-    def step_bound(self, n):
-        records, pwm_out, status_out = self._bound
-        return self.step_batch(records[:n], pwm_out, status_out)
-
-    def step_batch(self, records, pwm_out, status_out):
-        keep = ~((records["kind"] == self.kind) & (records["sim_ns"] >= self.after_ns))
-        if not keep.all():
-            records = records[keep]
-        return self._c.step_batch(records, pwm_out, status_out)
-
-    def __getattr__(self, name):
-        return getattr(self._c, name)
-
-
 class DroppingCore(FlightCore):
     """A FlightCore whose input loses one sensor stream from a given sim time (the records
-    never reach the C core, as when a sensor driver dies). FcLoop calls the C step_batch
-    directly, so the filter wraps the C object."""
+    never reach the C core, as when a sensor driver dies). The FC loop steps through
+    bind_batch's step, so the filter wraps that; and it refuses the C record router,
+    which would hand the records to the core unfiltered."""
 
     def __init__(self, kind: int, after_s: float):
         super().__init__()
-        self._c = _DroppingC(self._c, int(kind), int(after_s * 1e9))
+        self.kind, self.after_ns = int(kind), int(after_s * 1e9)
+
+    def bind_batch(self, records, pwm_out, status_out):
+        def step(n: int) -> int:
+            recs = records[:n]
+            keep = ~((recs["kind"] == self.kind) & (recs["sim_ns"] >= self.after_ns))
+            pwm, _ = self.step_batch(recs if keep.all() else recs[keep], pwm_out, status_out)
+            return len(pwm)
+        return step
+
+    def attach_router(self, *args, **kwargs):
+        return None     # the filter runs in Python: the FC loop polls in Python

@@ -9,9 +9,9 @@ import time
 import numpy as np
 import pytest
 
-from silbridge.bridge.runner import PeerWatch
-from silbridge.bridge.runner_errors import PeerLost
-from silbridge.fc_sil.runtime import FcLost, run_fc
+from silbridge.bridge.bridge_loop import PeerWatch
+from silbridge.bridge.errors import PeerLost
+from silbridge.fc_sil.fc_loop import FcLost, run_fc
 from silbridge.mavlink.hil.hil_codec import UPD_IMU
 from silbridge.mavlink.hil.hil_errors import HilInputError, HilPeerLost
 from silbridge.mavlink.hil.hil_transport import open_bridge_end
@@ -29,7 +29,7 @@ class Rig:
         self.sc, self.sim = make_simulator(opts)
         self.bridge = open_bridge_end(transport, None, default_port=0)
         cfg = bridge_config(opts, self.sc)
-        from silbridge.bridge.runner_main import prepare_segment
+        from silbridge.bridge.bridge_driver import prepare_segment
         prepare_segment(self.bridge, self.sim, cfg)
         self.fc_end = fc_segment(transport, "unused", hil_addr=bridge_address(self.bridge),
                                  wait_config=False)

@@ -27,8 +27,8 @@ sys.path.insert(0, HERE)
 
 from sitl_helpers import SitlVehicle, free_udp_port  # noqa: E402
 
-from silbridge.tools.autopilots.sitl_ardupilot import (ENV_BINARY, MAVLINK_TCP_BASE, PORT_STRIDE,  # noqa: E402
-                                            pick_instance, stop_sitl)
+from silbridge.tools.autopilots.ardupilot.sitl import (  # noqa: E402
+    ENV_BINARY, MAVLINK_TCP_BASE, PORT_STRIDE, pick_instance, stop_sitl)
 
 KINDS = ("silbridge", "arducopter")
 HOME = "-35.363261,149.165230,584,353"

@@ -3,7 +3,7 @@ tests/tools/test_px4_protocol.py): PX4's first messages, the freewheel start, lo
 
     SILBRIDGE_PX4=.../bin/px4 python tests/tools/record_px4_exchange.py [--steps 120]
 
-It runs the real bridge side (bridge/px4_server.py on a Simulator of S1) against a real PX4
+It runs the real bridge side (bridge/autopilots/px4/server.py on a Simulator of S1) against a real PX4
 SITL and writes every frame of the first `--steps` lockstep steps in the order the bridge
 sent or read them, hex-encoded, with the PX4 version string from its log.
 """
@@ -18,12 +18,12 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from silbridge.bridge.px4_physics import Px4Physics
-from silbridge.bridge.px4_server import Px4HilServer
+from silbridge.bridge.autopilots.px4.physics import Px4Physics
+from silbridge.bridge.autopilots.px4.server import Px4HilServer
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 from silbridge.mavlink.hil.hil_channel import make_codec
-from silbridge.tools.autopilots import sitl_px4 as sp
+from silbridge.tools.autopilots.px4 import sitl as sp
 
 FIXTURE = Path(__file__).with_name("px4_exchange.json")
 
@@ -78,7 +78,7 @@ def main() -> None:
     shutil.rmtree(work, ignore_errors=True)
     version = re.search(r"PX4 git-hash[^\n]*|px4 starting", text)
     FIXTURE.write_text(json.dumps({
-        "source": "PX4 v1.15.4 SITL, airframe 10016_none_iris, against bridge/px4_server.py "
+        "source": "PX4 v1.15.4 SITL, airframe 10016_none_iris, against bridge/autopilots/px4/server.py "
                   "on scenario S1 (tests/tools/record_px4_exchange.py)",
         "px4_log_marker": version.group(0) if version else "",
         "step_us": 1_000_000 // phys.step_hz,

@@ -14,8 +14,8 @@ import time
 import pytest
 
 from silbridge.fc_sil import params as P
-from silbridge.tools.autopilots.sitl_ardupilot import MAVLINK_TCP_BASE, PORT_STRIDE, pick_instance, \
-    stop_sitl
+from silbridge.tools.autopilots.ardupilot.sitl import (MAVLINK_TCP_BASE, PORT_STRIDE, pick_instance,
+                                                       stop_sitl)
 
 BINARY = os.environ.get("SILBRIDGE_ARDUCOPTER")
 pytestmark = pytest.mark.skipif(

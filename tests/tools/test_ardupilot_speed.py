@@ -1,5 +1,5 @@
-"""`python -m silbridge.tools.autopilots.ardupilot_speed`: the same ArduCopter binary on its own physics
-and on ours, side by side. The figures depend on the machine: only that both are measured and
+"""`python -m silbridge.tools.autopilots.ardupilot.speed`: the same ArduCopter binary on its own
+physics and on ours, side by side. The figures depend on the machine: only that both are measured and
 reported (and the per-packet profile) is checked, never a speed."""
 
 import json
@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+SPEED = "silbridge.tools.autopilots.ardupilot.speed"   # run as python -m
 needs_binary = pytest.mark.skipif(
     not os.environ.get("SILBRIDGE_ARDUCOPTER"),
     reason="set SILBRIDGE_ARDUCOPTER to an arducopter SITL binary to compare its speeds "
@@ -21,8 +22,8 @@ needs_binary = pytest.mark.skipif(
 
 @needs_binary
 def test_speed_tool_prints_both_speeds_and_the_ratio():
-    p = subprocess.run([sys.executable, "-m", "silbridge.tools.autopilots.ardupilot_speed", "--skip", "2",
-                        "--span", "3", "--flight", "0", "--json"],
+    p = subprocess.run([sys.executable, "-m", SPEED, "--skip", "2", "--span", "3",
+                        "--flight", "0", "--json"],
                        capture_output=True, text=True, timeout=150)
     assert p.returncode == 0, p.stderr[-2000:]
     out = json.loads(p.stdout)
@@ -49,13 +50,13 @@ def test_speed_tool_without_a_binary_says_how_to_get_one(tmp_path):
     env = _env_without_sitl()
     if shutil.which("arducopter", path=env["PATH"]):
         pytest.skip("an arducopter binary is in /usr/bin here: no binary cannot be shown")
-    p = subprocess.run([sys.executable, "-m", "silbridge.tools.autopilots.ardupilot_speed", "--json"],
+    p = subprocess.run([sys.executable, "-m", SPEED, "--json"],
                        capture_output=True, text=True, timeout=60, env=env)
     assert p.returncode == 2, p.stderr
     assert "SILBRIDGE_ARDUCOPTER" in p.stderr and "waf copter" in p.stderr
     assert "Traceback" not in p.stderr and p.stdout == ""
     # A variable naming a file that is not there is the same user error.
     env["SILBRIDGE_ARDUCOPTER"] = str(tmp_path / "missing")
-    p = subprocess.run([sys.executable, "-m", "silbridge.tools.autopilots.ardupilot_speed", "--json"],
+    p = subprocess.run([sys.executable, "-m", SPEED, "--json"],
                        capture_output=True, text=True, timeout=60, env=env)
     assert p.returncode == 2 and "waf copter" in p.stderr and "Traceback" not in p.stderr

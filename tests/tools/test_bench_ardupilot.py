@@ -30,23 +30,20 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.bridge import ardupilot_json as apj
-from silbridge.bridge.ardupilot_physics import ArduPilotPhysics
+from silbridge.bridge.autopilots.ardupilot import json_protocol as apj
+from silbridge.bridge.autopilots.ardupilot.physics import ArduPilotPhysics
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
-from silbridge.tools.autopilots.ardupilot_flight import BenchStepHooks
-from silbridge.tools.autopilots.ardupilot_log import SOURCE_ATTITUDE_TARGET, ArduPilotLogSink, AttitudeTarget
-from silbridge.tools.autopilots.ardupilot_setpoints import SetpointForwarder, thrust_for_climb
+from silbridge.tools.autopilots.ardupilot.driver import COPTER_MODE_GUIDED, MavlinkDriver
+from silbridge.tools.autopilots.ardupilot.setpoints import (ArduCopterSetpointForwarder,
+                                                            thrust_for_climb)
+from silbridge.tools.autopilots.ardupilot.sitl import find_arducopter, sitl_defaults, write_defaults
+from silbridge.tools.autopilots.common.flight import BenchStepHooks
+from silbridge.tools.autopilots.common.log_sink import (SOURCE_ATTITUDE_TARGET, AttitudeTarget,
+                                                        AutopilotLogSink)
+from silbridge.tools.benchmark.metrics import Windows, compute_metrics
 from silbridge.tools.logs.integrity import check_log
 from silbridge.tools.logs.mcap_log import read_log
-from silbridge.tools.benchmark.metrics import Windows, compute_metrics
-from silbridge.tools.autopilots.sitl_ardupilot import (
-    COPTER_MODE_GUIDED,
-    MavlinkDriver,
-    find_arducopter,
-    sitl_defaults,
-    write_defaults,
-)
 
 CLI = [sys.executable, "-m", "silbridge.tools"]
 
@@ -122,7 +119,7 @@ def _short_s4(start_s: float = 1.0):
 
 
 def _roll_pitch_yaw(q):
-    from silbridge.bridge.ardupilot_physics import euler_from_quat
+    from silbridge.bridge.frames import euler_from_quat
     return euler_from_quat(*q)
 
 
@@ -134,7 +131,7 @@ def test_bridge_side_log_forwards_the_profile_and_logs_timing(tmp_path):
     target = AttitudeTarget()
     sent, alt = [], {"m": None}
     phys = ArduPilotPhysics(lambda: Simulator(sc))
-    fwd = SetpointForwarder(sc, phys.sim.dt_ns, math.radians(sc.home.heading_deg),
+    fwd = ArduCopterSetpointForwarder(sc, phys.sim.dt_ns, math.radians(sc.home.heading_deg),
                             send=lambda *a: sent.append((phys.sim.sim_ns, *a)) or True,
                             reported_alt_m=lambda: alt["m"])
     meta = {"config": {"imu_hz": phys.sim.imu_hz, "pwm_hz": 1000.0, "physics_hz": 1000.0,
@@ -142,7 +139,7 @@ def test_bridge_side_log_forwards_the_profile_and_logs_timing(tmp_path):
                        "duration_s": 2.5, "seed": sc.seed},
             "params": {"MOT_PWM_MIN": 1000, "MOT_PWM_MAX": 2000}}
     path = tmp_path / "ap.mcap"
-    sink = ArduPilotLogSink(path, metadata=meta, target=target, duration_s=2.5, command=fwd)
+    sink = AutopilotLogSink(path, metadata=meta, target=target, duration_s=2.5, command=fwd)
     hooks = phys.sink = BenchStepHooks(fwd, sink)
     frame = 0
     while not sink.done:
@@ -209,7 +206,7 @@ def test_bridge_side_log_forwards_the_profile_and_logs_timing(tmp_path):
 def test_forwarder_flies_altitude_through_the_thrust_field():
     sc = load_scenario("S1")
     sent, alt = [], {"m": None}
-    fwd = SetpointForwarder(sc, 1_000_000, 0.0, send=lambda *a: sent.append(a) or True,
+    fwd = ArduCopterSetpointForwarder(sc, 1_000_000, 0.0, send=lambda *a: sent.append(a) or True,
                             reported_alt_m=lambda: alt["m"])
     fwd.step(5_000_000)                      # before take-off: nothing
     fwd.start_at(5_000_000)
@@ -223,7 +220,7 @@ def test_forwarder_flies_altitude_through_the_thrust_field():
     assert thrust_for_climb(0.0) == 0.5 and thrust_for_climb(10.0) == 1.0
     assert thrust_for_climb(-0.75) == pytest.approx(0.25) and thrust_for_climb(-9.0) == 0.0
     # A link that is not up yet: counted, retried at the next step, not every 50 ms.
-    fails = SetpointForwarder(sc, 1_000_000, 0.0, send=lambda *a: False,
+    fails = ArduCopterSetpointForwarder(sc, 1_000_000, 0.0, send=lambda *a: False,
                               reported_alt_m=lambda: None)
     fails.start_at(0)
     for k in range(1, 10_003):
@@ -439,9 +436,10 @@ def test_bench_run_forwards_the_s4_doublet_to_the_stand_in(tmp_path, fake_sitl_b
     """S4's roll doublet, moved to 2 s after take-off, reaches the stand-in ArduCopter as
     SET_ATTITUDE_TARGET at >= 10 Hz of sim time, GUIDED, rates ignored, thrust = hold; the
     log scores the command we sent and times the JSON link."""
+    from silbridge.bridge.scenario import SCENARIO_DIR
     from silbridge.tools.benchmark.campaign import make_specs, run_one
 
-    text = (Path(apj.__file__).parent / "scenarios" / "S4.toml").read_text()
+    text = (SCENARIO_DIR / "S4.toml").read_text()
     text = text.replace("start_s = 10.0", "start_s = 2.0").replace("repeat = 6", "repeat = 1")
     text = text.replace("start_s = 20.0", "start_s = 60.0").replace("repeat = 5", "repeat = 1")
     path = tmp_path / "S4short.toml"

@@ -8,8 +8,8 @@ import sys
 
 import pytest
 
-from silbridge.fc_sil.params import ABLATION_FEATURES, FEATURES
-from silbridge.tools.benchmark.ablation import feature_params, variants
+from silbridge.fc_sil.params import ABLATION_FEATURES, FEATURES, feature_params
+from silbridge.tools.benchmark.ablation import variants
 from silbridge.tools.benchmark.campaign import make_specs, run_campaign
 from silbridge.tools.benchmark.table1 import aggregate, markdown
 

@@ -187,6 +187,23 @@ def test_compressed_logs_round_trip(tmp_path, run, compression):
     assert not any(isinstance(r, Message) for r in records)     # none outside a chunk
 
 
+def test_compressed_logs_hold_the_plain_logs_viewable_messages(tmp_path, run):
+    """The viewable channels' records, built by our layout (tools/logs/mcap_layout.py), reach
+    the mcap package's compressing writer message for message: same sequence numbers,
+    times and bytes as in our own unchunked file."""
+    got = {}
+    for compression in ("none", "zstd"):
+        path = tmp_path / f"{compression}.mcap"
+        with LogWriter(path, metadata=run.metadata, compression=compression) as w:
+            write_run(run, w)
+        with open(path, "rb") as f:
+            got[compression] = sorted(
+                (c.topic, m.sequence, m.log_time, m.publish_time, m.data)
+                for _, c, m in make_reader(f).iter_messages() if c.topic.startswith("/viz/"))
+    assert {m[0] for m in got["none"]} >= {"/viz/attitude", "/viz/tf", "/viz/scene"}
+    assert got["zstd"] == got["none"]
+
+
 def test_a_channel_keeps_its_dtype(tmp_path):
     with LogWriter(tmp_path / "x.mcap", metadata={}) as w:
         w.write("/imu", empty(Kind.IMU, 2))

@@ -21,13 +21,13 @@ from pathlib import Path
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.bridge.px4_physics import Px4Physics
-from silbridge.bridge import px4_server
-from silbridge.bridge.px4_server import Px4HilServer
-from silbridge.bridge.runner_errors import StartupCheckFailed
+from silbridge.bridge.autopilots.px4.physics import Px4Physics
+from silbridge.bridge.autopilots.px4 import server as px4_server
+from silbridge.bridge.autopilots.px4.server import Px4HilServer
+from silbridge.bridge.errors import StartupCheckFailed
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
-from silbridge.mavlink.hil import px4_hil
+from silbridge.bridge.autopilots.px4 import hil_messages as px4_hil
 from silbridge.mavlink.hil.hil_channel import make_codec
 
 FIXTURE = Path(__file__).with_name("px4_exchange.json")

@@ -1,4 +1,4 @@
-"""The pre-flight height check (tools/autopilots/px4_rest_height.py) on PX4's own reports.
+"""The pre-flight height check (tools/autopilots/px4/rest_height.py) on PX4's own reports.
 
 The two sequences are LOCAL_POSITION_NED (sim time s, z m, vz m/s) from two real-time boots
 of PX4 v1.15.4 on our physics under one busy loop (issue 29), one report every ~0.25 s, from
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import pytest
 
-from silbridge.tools.autopilots import px4_rest_height as rh
-from silbridge.tools.autopilots.px4_rest_height import RestHeightCheck
+from silbridge.tools.autopilots.px4 import rest_height as rh
+from silbridge.tools.autopilots.px4.rest_height import RestHeightCheck
 
 BAD_BOOT = [(1.116, 1.194, 1.507), (1.376, 1.596, 0.701), (1.636, 1.15, 0.259),
             (1.9, 0.901, 0.089), (2.156, 0.763, 0.001), (2.416, 0.685, -0.04),

@@ -1,7 +1,7 @@
 """The real PX4 v1.15 SITL on our physics, end to end (SILBRIDGE_PX4 names its binary).
 
 - lockstep: PX4 boots on our physics, arms, takes off to 5 m, switches to OFFBOARD (the
-  companion computer's altitude loop, tools/autopilots/px4_setpoints.py) and holds there;
+  companion computer's altitude loop, tools/autopilots/px4/setpoints.py) and holds there;
 - `silbridge bench --fc px4`: a short run gives a valid log and the 'S1 PX4' rows of Table 1;
 - real time: the same boot, take-off, OFFBOARD and hold paced to the wall clock;
 
@@ -45,8 +45,8 @@ takeoff_alt_m = 5.0
 
 
 def _fly(tmp_path, *, scenario: str, duration_s: float, realtime: bool = False) -> dict:
-    from silbridge.tools.autopilots.px4_flight import fly_px4
-    from silbridge.tools.autopilots.sitl_px4 import find_px4
+    from silbridge.tools.autopilots.px4.flight import fly_px4
+    from silbridge.tools.autopilots.px4.sitl import find_px4
 
     binary, etc = find_px4(PX4)
     return fly_px4(scenario=scenario, seed=None, duration_s=duration_s,
@@ -139,10 +139,10 @@ def test_px4_takes_off_and_holds_in_offboard_in_real_time(tmp_path):
     assert check_log(log) == []
     # Under load, some real-time boots of PX4 start EKF2 with a vertical velocity at rest and
     # keep the height it integrates as their baro offset (issue 29); the pre-flight check
-    # (tools/autopilots/px4_rest_height.py) takes off only once PX4's height at rest has
+    # (tools/autopilots/px4/rest_height.py) takes off only once PX4's height at rest has
     # settled, restarting PX4 when it does not, so the hold is held to lockstep's figures.
-    from silbridge.tools.autopilots.px4_flight import HEIGHT_RESTARTS
-    from silbridge.tools.autopilots.px4_rest_height import REST_Z_M
+    from silbridge.tools.autopilots.px4.flight import HEIGHT_RESTARTS
+    from silbridge.tools.autopilots.px4.rest_height import REST_Z_M
 
     rest = s["rest_height"]
     assert rest["settled_s"] is not None and abs(rest["z_m"]) <= REST_Z_M
@@ -153,7 +153,7 @@ def test_px4_takes_off_and_holds_in_offboard_in_real_time(tmp_path):
 
 
 def test_bridge_fc_px4_serves_a_px4_started_by_hand(tmp_path):
-    from silbridge.tools.autopilots.sitl_px4 import (
+    from silbridge.tools.autopilots.px4.sitl import (
         SIM_TCP_BASE,
         find_px4,
         pick_instance,

@@ -3,7 +3,9 @@
 The stabilisation features and the FC switch behind each are declared once, in
 ``fc_sil/params.py`` (``FEATURES``: name -> enable parameter; ``ABLATION_FEATURES``:
 the paper's ablation list). The CLI's ``--feature-off`` choices, this module's
-variants, ``FlightCore.set_feature`` and docs/params.md all take those names.
+variants, ``FlightCore.set_feature`` and docs/params.md all take those names; the
+overrides that switch named features off (``feature_params``) live there too, as the
+flight assembly (tools/loop/flight.py) applies them to every flight.
 
 Ablation (paper 2.1): each feature switched off alone, and all off, on the same
 seeds as the full controller. Every variant sets every paper switch explicitly, so
@@ -13,21 +15,7 @@ them off by default. ``defaults`` flies the declared defaults, so the same table
 shows where they stand against the paper's controller.
 """
 
-from silbridge.fc_sil.params import ABLATION_FEATURES, FEATURES
-
-
-class UnknownFeature(ValueError):
-    user_facing = True
-
-
-def feature_params(features_off) -> dict:
-    """Parameter overrides that switch the named features off."""
-    out = {}
-    for f in features_off:
-        if f not in FEATURES:
-            raise UnknownFeature(f"unknown feature {f!r}; choose from {', '.join(FEATURES)}")
-        out[FEATURES[f]] = 0
-    return out
+from silbridge.fc_sil.params import ABLATION_FEATURES, FEATURES, feature_params
 
 
 def variant_switches(features_off) -> dict:

@@ -108,15 +108,15 @@ def _fly_and_score(spec: RunSpec) -> RunResult:
     Path(spec.log_path).parent.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     if spec.fc == "ardupilot":
-        from silbridge.tools.autopilots.ardupilot_flight import fly_ardupilot
+        from silbridge.tools.autopilots.ardupilot.flight import fly_ardupilot
         summary = fly_ardupilot(scenario=spec.scenario, seed=spec.seed,
                                 duration_s=spec.duration_s, log_path=spec.log_path,
                                 binary=spec.sitl, imu_hz=spec.imu_hz, params=dict(spec.params),
                                 speedup=spec.sitl_speedup, spin_us=spec.link_spin_us)
         return _result_from_log(spec, summary, t0)
     if spec.fc == "px4":
-        from silbridge.tools.autopilots.px4_flight import fly_px4
-        from silbridge.tools.autopilots.sitl_px4 import find_px4
+        from silbridge.tools.autopilots.px4.flight import fly_px4
+        from silbridge.tools.autopilots.px4.sitl import find_px4
         binary, etc = find_px4(spec.px4)
         summary = fly_px4(scenario=spec.scenario, seed=spec.seed, duration_s=spec.duration_s,
                           log_path=spec.log_path, binary=binary, etc=etc, imu_hz=spec.imu_hz,

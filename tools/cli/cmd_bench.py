@@ -155,10 +155,10 @@ def _autopilot_binaries(args, fcs: list[str]) -> tuple[str | None, str | None]:
                                 f"{flag} out")
     arducopter = px4 = None
     if "ardupilot" in fcs:
-        from silbridge.tools.autopilots.sitl_ardupilot import require_arducopter
+        from silbridge.tools.autopilots.ardupilot.sitl import require_arducopter
         arducopter = require_arducopter(args.arducopter)
     if "px4" in fcs:
-        from silbridge.tools.autopilots.sitl_px4 import require_px4
+        from silbridge.tools.autopilots.px4.sitl import require_px4
         px4 = require_px4(args.px4)[0]
     return arducopter, px4
 

@@ -12,7 +12,7 @@ import json
 import math
 import sys
 
-from silbridge.bridge.runner_main import prepare_segment, run_bridge
+from silbridge.bridge.bridge_driver import prepare_segment, run_bridge
 
 from silbridge.tools.loop.fc_handover import untaken, write_handover
 from silbridge.tools.loop.fc_param_events import param_at_args, param_events
@@ -30,7 +30,7 @@ from silbridge.tools.cli.flight_args import (
 HELP = "the simulator program: JSBSim + sensors, publishes to the SIL FC over shared memory"
 
 def add_arguments(p) -> None:
-    from silbridge.bridge.ardupilot_json import DEFAULT_PORT, PORT_STRIDE
+    from silbridge.bridge.autopilots.ardupilot.json_protocol import DEFAULT_PORT, PORT_STRIDE
 
     add_flight_arguments(p, processes=False, link_help=(
         f"; --fc ardupilot: where SITL sends its servo packets (default "
@@ -128,33 +128,17 @@ def _refuse(args, opts, fc: str, extra=()) -> None:
 
 def _run_ardupilot(args) -> int:
     """Our physics as ArduPilot SITL's JSON backend (lockstep: SITL sets the pace)."""
-    from silbridge.bridge.ardupilot_json import sitl_port
-    from silbridge.tools.autopilots.ardupilot_flight import serve_bridge
+    from silbridge.tools.autopilots.ardupilot.bridge_cmd import run_ardupilot_bridge
 
     opts = options_from_args(args)
     _refuse(args, opts, "ardupilot", extra=[
         ("--realtime/--speed: SITL paces the JSON link (its --speedup)", not opts.lockstep)])
-    address = opts.hil_addr
-    if address is None and args.sitl_instance is not None:
-        address = f"127.0.0.1:{sitl_port(args.sitl_instance)}"
-    out = (lambda s: print(s, file=sys.stderr)) if args.json else print
-    summary = serve_bridge(opts.scenario, seed=opts.seed, imu_hz=opts.imu_hz,
-                           duration_s=opts.duration_s, sitl_address=address, out=out)
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        link = summary["json_link"]
-        out(f"ArduPilot SITL: {summary['sim_s']:.2f} s simulated in "
-            f"{summary['wall_s']:.2f} s wall; "
-            f"{link['packets']} servo packets, {link['duplicates']} resent, "
-            f"{link['dropped_frames']} lost, {link['resets']} SITL restarts; "
-            f"crashed {summary['crashed']}")
-    return 1 if summary["crashed"] else 0
+    return run_ardupilot_bridge(args)
 
 
 def _run_px4(args) -> int:
-    """PX4 over its simulator link (tools/autopilots/px4_bridge.py)."""
-    from silbridge.tools.autopilots.px4_bridge import run_px4_bridge
+    """PX4 over its simulator link (tools/autopilots/px4/bridge_cmd.py)."""
+    from silbridge.tools.autopilots.px4.bridge_cmd import run_px4_bridge
 
     opts = options_from_args(args)
     _refuse(args, opts, "px4", extra=[

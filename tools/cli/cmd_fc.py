@@ -48,7 +48,7 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from silbridge.fc_sil.runtime import run_fc
+    from silbridge.fc_sil.fc_loop import run_fc
 
     from silbridge.fc_sil.param_schedule import parse_param_at
     from silbridge.tools.loop.fc_handover import take_handover

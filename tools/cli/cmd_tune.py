@@ -146,7 +146,7 @@ def run(args) -> int:
     axes = _axes(args.axis)
     base = _base_params(args)
     if args.action == "anchor":      # the binary first: a missing one stops before any flight
-        from silbridge.tools.autopilots.sitl_ardupilot import require_arducopter
+        from silbridge.tools.autopilots.ardupilot.sitl import require_arducopter
         args.arducopter = require_arducopter(args.arducopter)
         if args.ours and not Path(args.ours).is_file():
             raise TuneArgsError(f"--ours {args.ours}: no such file; give the .parm file "

@@ -90,7 +90,7 @@ def add_flight_arguments(p: argparse.ArgumentParser, *, processes: bool,
 
 def add_strict_rates_argument(p: argparse.ArgumentParser) -> None:
     """--strict-rates: the real-time rate check refuses instead of reporting (`fly`, `sitl`)."""
-    from silbridge.bridge.runner_main import BridgeRunConfig
+    from silbridge.bridge.bridge_driver import BridgeRunConfig
 
     tol = BridgeRunConfig.rate_tolerance * 100
     p.add_argument("--strict-rates", action="store_true",

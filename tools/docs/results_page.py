@@ -212,7 +212,7 @@ def main(argv: list[str] | None = None) -> int:
                          None if args.no_transport else args.transport_args)
         table, table_md = load_bench(bench_out)
         transport = load_transport(_transport_dir(args, bench_out))
-        from silbridge.tools.autopilots.sitl_ardupilot import find_arducopter
+        from silbridge.tools.autopilots.ardupilot.sitl import find_arducopter
         from silbridge.tools.docs.jsbsim_speed import measure
         from silbridge.tools.docs.results_speed import measure_arducopter
         jsbsim = measure()

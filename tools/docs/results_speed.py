@@ -5,7 +5,7 @@ References:
 - bare JSBSim `run()` on our quadx at 1 kHz (tools/docs/jsbsim_speed.py): the physics alone,
   the ceiling of any loop built on it;
 - ArduCopter SITL on its own built-in physics (`--model quad --speedup 1000`, measured by
-  tools/autopilots/ardupilot_speed.py's `measure_reference`), when a binary is at hand: what
+  tools/autopilots/ardupilot/speed.py's `measure_reference`), when a binary is at hand: what
   the autopilot itself reaches with no external simulator, the ceiling of ArduCopter on ours.
 
 A campaign run's figure is its own `realtime_factor` (sim seconds over the run's wall
@@ -17,13 +17,13 @@ overall figure divides all simulated seconds by its wall time, so it includes ru
 from __future__ import annotations
 
 # ArduCopter's reference window: sim seconds of boot skipped, then sim seconds measured
-# (ardupilot_speed's defaults: parameter loading happens in the first seconds).
+# (tools/autopilots/ardupilot/speed.py's defaults: parameter loading happens in the first seconds).
 ARDUCOPTER_SKIP_S = 5.0
 ARDUCOPTER_SPAN_S = 30.0
 
 
 def measure_arducopter(binary: str) -> dict:
-    from silbridge.tools.autopilots.ardupilot_speed import measure_reference
+    from silbridge.tools.autopilots.ardupilot.speed import measure_reference
     ref = measure_reference(binary, skip_s=ARDUCOPTER_SKIP_S, span_s=ARDUCOPTER_SPAN_S)
     return ref | {"binary": binary, "skip_s": ARDUCOPTER_SKIP_S, "span_s": ARDUCOPTER_SPAN_S}
 

@@ -173,21 +173,46 @@ def unfinished_reason(log: RunLog) -> str | None:
     return None
 
 
+@dataclasses.dataclass
+class _RunSpan:
+    """The sim time a log's counts are checked over, and what the log's ending says."""
+    duration_s: float | None
+    unfinished: str | None        # why the writer never finished, None if it did
+    problems: list[str]
+    notes: list[str]
+
+
 def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
                 rate_tol_pct: float = 5.0) -> IntegrityReport:
-    problems: list[str] = []
-    notes: list[str] = []
-    duration = expected_duration_s(log)
-    unfinished = unfinished_reason(log)
-    # Each channel is checked over the time it covers: up to its own last row in an
-    # unfinished log (the writer flushes every channel at least every half second, so a
-    # killed run loses at most that much of each), up to the stop in an interrupted one.
-    own_span = unfinished is not None
-    if unfinished is not None:
-        notes.append(f"log unfinished: {unfinished}; metrics cover what it holds")
+    span = _run_span(log)
+    problems, notes = span.problems, span.notes
+    rates = nominal_rates_hz(log)
+    stats: dict[str, ChannelStats] = {}
+    for name in sorted(set(log.channels) | set(rates)):
+        rows = log.channels.get(name)
+        if rows is None or not len(rows):
+            _no_rows(name, rates, span.duration_s, problems, notes)
+            continue
+        # Each channel is checked over the time it covers: up to its own last row in an
+        # unfinished log (the writer flushes every channel at least every half second, so a
+        # killed run loses at most that much of each), up to the stop in an interrupted one.
+        duration = span.duration_s
+        if span.unfinished is not None and "sim_ns" in rows.dtype.names:
+            duration = int(rows["sim_ns"][-1]) * 1e-9
+        st = stats[name] = _channel_stats(name, rows, rates.get(name), duration)
+        problems += _channel_problems(st, duration, max_loss_pct, rate_tol_pct)
+    problems += _writer_problems(log) + _failed_checks(log)
+    return IntegrityReport(stats, problems, span.duration_s, notes,
+                           _missing_at_end(span, stats))
+
+
+def _run_span(log: RunLog) -> _RunSpan:
+    span = _RunSpan(expected_duration_s(log), unfinished_reason(log), [], [])
+    if span.unfinished is not None:
+        span.notes.append(f"log unfinished: {span.unfinished}; metrics cover what it holds")
     elif log.read_error:
-        problems.append(f"log is corrupt: {log.read_error}; its data ends at "
-                        f"{log.duration_s():.3f} s")
+        span.problems.append(f"log is corrupt: {log.read_error}; its data ends at "
+                             f"{log.duration_s():.3f} s")
     # A run that ended early on purpose (Ctrl-C: "interrupted") or because its other half
     # died ("aborted", e.g. the bridge was killed) is checked up to where it ended.
     end = log.end or {}
@@ -195,56 +220,61 @@ def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
         ("aborted: " + str(end["aborted"])) if end.get("aborted") else None
     if early and end.get("end_sim_ns") is not None:
         stopped = int(end["end_sim_ns"]) * 1e-9
-        notes.append(f"run {early} at {stopped:.3f} s of sim time"
-                     + (f" (planned {duration:g} s)" if duration else ""))
-        duration = stopped
+        span.notes.append(f"run {early} at {stopped:.3f} s of sim time"
+                          + (f" (planned {span.duration_s:g} s)" if span.duration_s else ""))
+        span.duration_s = stopped
+    return span
 
-    rates = nominal_rates_hz(log)
-    stats: dict[str, ChannelStats] = {}
-    for name in sorted(set(log.channels) | set(rates)):
-        rows = log.channels.get(name)
-        if rows is None or not len(rows):
-            # A stream owes no rows over a span too short for more samples than the rounding
-            # slack (as with rows below): a run stopped (Ctrl-C) just after it started, e.g.
-            # a campaign's second worker, or GNSS whose first fix comes one period + latency in.
-            due = None if duration is None or name not in rates else \
-                int(math.floor(rates[name] * duration + 1e-6))
-            owed = name in rates and (due is None or due > ROUNDING_SLACK)
-            if owed:
-                problems.append(f"{name}: no rows, but the run config sets {rates[name]:g} Hz")
-            elif name in rates:
-                notes.append(f"{name}: no rows (the run ended within its first samples)")
-            continue
-        span = duration
-        if own_span and len(rows) and "sim_ns" in rows.dtype.names:
-            span = int(rows["sim_ns"][-1]) * 1e-9
-        s = stats[name] = _channel_stats(name, rows, rates.get(name), span)
-        if s.time_backwards:
-            kind = "steps back" if name in NON_STRICT else "does not increase"
-            problems.append(f"{name}: sim time {kind} {s.time_backwards} times "
-                            "(timestamps must be monotonic)")
-        if s.seq_repeats:
-            problems.append(f"{name}: sequence number repeats or steps back "
-                            f"{s.seq_repeats} times")
-        if s.expected:
-            slack = max(ROUNDING_SLACK, s.expected * max_loss_pct / 100.0)
-            if s.missing and s.missing > slack:
-                problems.append(f"{name}: {s.rows} of {s.expected} expected samples "
-                                f"({s.missing} missing, {100.0 * s.missing / s.expected:.2f} %; "
-                                f"{s.rate_hz:g} Hz for {span:g} s; data ends at "
-                                f"{s.last_s:.3f} s)")
-            elif s.rows - s.expected > slack:
-                problems.append(f"{name}: {s.rows} samples, {s.rows - s.expected} more than "
-                                f"the {s.expected} that {s.rate_hz:g} Hz for {span:g} s gives")
-        seq_pct = 100.0 * s.seq_lost / (s.rows + s.seq_lost) if s.seq_lost else 0.0
-        if seq_pct > max_loss_pct:
-            problems.append(f"{name}: {s.seq_lost} samples lost between sequence numbers "
-                            f"({seq_pct:.2f} % > {max_loss_pct:g} %)")
-        if s.rate_hz and s.effective_hz and \
-                abs(s.effective_hz - s.rate_hz) > s.rate_hz * rate_tol_pct / 100.0:
-            problems.append(f"{name}: effective rate {s.effective_hz:.1f} Hz is off the "
-                            f"configured {s.rate_hz:g} Hz by more than {rate_tol_pct:g} %")
 
+def _no_rows(name: str, rates: dict[str, float], duration: float | None, problems: list[str],
+             notes: list[str]) -> None:
+    """A channel without rows: a problem only if its rate owed some over the run."""
+    # A stream owes no rows over a span too short for more samples than the rounding
+    # slack (as with rows below): a run stopped (Ctrl-C) just after it started, e.g.
+    # a campaign's second worker, or GNSS whose first fix comes one period + latency in.
+    due = None if duration is None or name not in rates else \
+        int(math.floor(rates[name] * duration + 1e-6))
+    owed = name in rates and (due is None or due > ROUNDING_SLACK)
+    if owed:
+        problems.append(f"{name}: no rows, but the run config sets {rates[name]:g} Hz")
+    elif name in rates:
+        notes.append(f"{name}: no rows (the run ended within its first samples)")
+
+
+def _channel_problems(s: ChannelStats, span: float | None, max_loss_pct: float,
+                      rate_tol_pct: float) -> list[str]:
+    name, problems = s.channel, []
+    if s.time_backwards:
+        kind = "steps back" if name in NON_STRICT else "does not increase"
+        problems.append(f"{name}: sim time {kind} {s.time_backwards} times "
+                        "(timestamps must be monotonic)")
+    if s.seq_repeats:
+        problems.append(f"{name}: sequence number repeats or steps back "
+                        f"{s.seq_repeats} times")
+    if s.expected:
+        slack = max(ROUNDING_SLACK, s.expected * max_loss_pct / 100.0)
+        if s.missing and s.missing > slack:
+            problems.append(f"{name}: {s.rows} of {s.expected} expected samples "
+                            f"({s.missing} missing, {100.0 * s.missing / s.expected:.2f} %; "
+                            f"{s.rate_hz:g} Hz for {span:g} s; data ends at "
+                            f"{s.last_s:.3f} s)")
+        elif s.rows - s.expected > slack:
+            problems.append(f"{name}: {s.rows} samples, {s.rows - s.expected} more than "
+                            f"the {s.expected} that {s.rate_hz:g} Hz for {span:g} s gives")
+    seq_pct = 100.0 * s.seq_lost / (s.rows + s.seq_lost) if s.seq_lost else 0.0
+    if seq_pct > max_loss_pct:
+        problems.append(f"{name}: {s.seq_lost} samples lost between sequence numbers "
+                        f"({seq_pct:.2f} % > {max_loss_pct:g} %)")
+    if s.rate_hz and s.effective_hz and \
+            abs(s.effective_hz - s.rate_hz) > s.rate_hz * rate_tol_pct / 100.0:
+        problems.append(f"{name}: effective rate {s.effective_hz:.1f} Hz is off the "
+                        f"configured {s.rate_hz:g} Hz by more than {rate_tol_pct:g} %")
+    return problems
+
+
+def _writer_problems(log: RunLog) -> list[str]:
+    """What the writer's closing summary says went wrong, or does not match the file."""
+    problems = []
     if log.end is not None:
         for kind, n in (log.end.get("unknown_records") or {}).items():
             problems.append(f"{n} records of unknown kind {kind} reached the writer "
@@ -254,19 +284,25 @@ def inspect_log(log: RunLog, *, max_loss_pct: float = 0.5,
             held = len(log.channels.get(name, ()))
             if held != written:
                 problems.append(f"{name}: the writer wrote {written} rows, the log holds {held}")
+    return problems
 
-    for e in log.events:
-        if e["kind"] == "check" and not _check_passed(e):
-            problems.append(f"run check failed at {e['sim_ns'] * 1e-9:.3f} s: {e['text']}")
-    missing_end = None
-    if unfinished is not None:
-        missing_end = {"reason": unfinished, "planned_s": duration, "channels": {
-            name: {"last_s": st.last_s,
-                   # Only streams with a rate are due until the end (not /setpoint, /events).
-                   "missing_s": (max(duration - st.last_s, 0.0) if duration is not None
-                                 and st.last_s is not None and st.rate_hz else None)}
-            for name, st in stats.items()}}
-    return IntegrityReport(stats, problems, duration, notes, missing_end)
+
+def _failed_checks(log: RunLog) -> list[str]:
+    return [f"run check failed at {e['sim_ns'] * 1e-9:.3f} s: {e['text']}"
+            for e in log.events if e["kind"] == "check" and not _check_passed(e)]
+
+
+def _missing_at_end(span: _RunSpan, stats: dict[str, ChannelStats]) -> dict | None:
+    """IntegrityReport.unfinished: per channel, how much is missing at the end."""
+    if span.unfinished is None:
+        return None
+    duration = span.duration_s
+    return {"reason": span.unfinished, "planned_s": duration, "channels": {
+        name: {"last_s": st.last_s,
+               # Only streams with a rate are due until the end (not /setpoint, /events).
+               "missing_s": (max(duration - st.last_s, 0.0) if duration is not None
+                             and st.last_s is not None and st.rate_hz else None)}
+        for name, st in stats.items()}}
 
 
 def check_log(log: RunLog, *, max_loss_pct: float = 0.5, rate_tol_pct: float = 5.0) -> list[str]:

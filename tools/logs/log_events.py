@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 
 from silbridge.tools.logs.log_format import EVENTS_CHANNEL, to_json
+from silbridge.shm.records import NS_PER_S
 
 # foxglove.Log, with our own fields added; Foxglove's Log panel reads the first five.
 EVENT_SCHEMA = {
@@ -45,7 +46,7 @@ class EventChannel:
                                                 json.dumps(EVENT_SCHEMA).encode())
             self._channel = self._mcap.register_channel(EVENTS_CHANNEL, "json", schema)
         sim_ns = int(sim_ns)
-        body = {"timestamp": {"sec": sim_ns // 1_000_000_000, "nsec": sim_ns % 1_000_000_000},
+        body = {"timestamp": {"sec": sim_ns // NS_PER_S, "nsec": sim_ns % NS_PER_S},
                 "level": 2, "name": str(kind), "message": str(text), "file": "", "line": 0,
                 "sim_ns": sim_ns, "fields": fields}
         self._mcap.add_message(self._channel, max(sim_ns, 0), max(sim_ns, 0),

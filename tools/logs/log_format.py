@@ -23,7 +23,6 @@ EVENTS_CHANNEL = "/events"
 RUN_CHANNEL = "/run/metadata"
 STATUS_CHANNEL = "/fc/status"
 TIMING_CHANNEL = "/timing"
-MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 # The channel each record kind goes to (names fixed by the logging contract).
 KIND_CHANNELS = {

@@ -25,10 +25,11 @@ from mcap.exceptions import EndOfFile
 from mcap.records import Channel, Chunk, Footer, Message, Metadata
 from mcap.stream_reader import StreamReader, breakup_chunk
 
-from silbridge.tools.logs.log_format import (CHANNEL_DTYPE_KEY, EVENTS_CHANNEL, MCAP_MAGIC,
-                                        META_END, META_RUN, LogError)
+from silbridge.tools.logs.log_format import (CHANNEL_DTYPE_KEY, EVENTS_CHANNEL, META_END,
+                                             META_RUN, LogError)
 from silbridge.tools.logs.log_schema import (CorruptChannel, decode_messages, dtype_from_json,
                                         visible)
+from silbridge.tools.logs.mcap_layout import MAGIC, MESSAGE_CHANNEL, OP_MESSAGE
 
 
 @dataclasses.dataclass
@@ -75,7 +76,7 @@ def read_log(path: str | Path, channels: list[str] | None = None) -> RunLog:
     except OSError as exc:
         raise LogError(f"cannot read log {path}: {exc.strerror}") from exc
     with f:
-        if f.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
+        if f.read(len(MAGIC)) != MAGIC:
             raise LogError(f"{path} is not an MCAP file (bad magic bytes); "
                            "pass the .mcap file a silbridge run wrote")
         f.seek(0)
@@ -168,7 +169,7 @@ def _skip_chunk(chunk: Chunk, chans: dict, keep) -> bool:
     """True for an uncompressed chunk whose first message is on a channel not wanted, or on
     one holding no batches: the one-channel chunks of the viewable channels."""
     data = chunk.data
-    if chunk.compression or len(data) < 11 or data[0] != 0x05:   # 0x05: a Message record
+    if chunk.compression or len(data) < MESSAGE_CHANNEL.stop or data[0] != OP_MESSAGE:
         return False
-    ch = chans.get(int.from_bytes(data[9:11], "little"))
+    ch = chans.get(int.from_bytes(data[MESSAGE_CHANNEL], "little"))
     return ch is not None and (CHANNEL_DTYPE_KEY not in ch.metadata or not keep(ch.topic))

@@ -36,6 +36,7 @@ import struct
 import zlib
 
 import numpy as np
+from silbridge.shm.records import NS_PER_S
 
 CDR_HEADER = b"\x00\x01\x00\x00"
 
@@ -200,8 +201,8 @@ class BatchCodec:
         n rows (any bytes-like object, not copied) and their sim times [ns]."""
         n = len(sim_ns)
         first_ns = int(sim_ns[0])
-        parts = [self._head.pack(CDR_HEADER, first_ns // 1_000_000_000,
-                                 first_ns % 1_000_000_000, n),
+        parts = [self._head.pack(CDR_HEADER, first_ns // NS_PER_S,
+                                 first_ns % NS_PER_S, n),
                  (sim_ns * 1e-9).tobytes(), self._mid.pack(self.itemsize, n), raw]
         pad = self._crc_offset(n) - (28 + 8 * n + n * self.itemsize)
         if pad:

@@ -3,7 +3,8 @@
 `synthetic_run(...)` builds every channel a closed-loop run logs (sensor and
 ground-truth records in the shm record dtypes, one FC status row per PWM tick,
 one timing row per physics step, events and start metadata) from closed-form
-signals, so each metric has an answer known on paper:
+signals (their constants: the fields of `RunSignals`, one step per channel), so each
+metric has an answer known on paper:
 
 - true roll = commanded roll + roll_err_amp_deg * sin(2 pi roll_err_hz t): the
   attitude error RMS is amp/sqrt(2) and its 95th percentile amp*sin(0.95 pi/2)
@@ -29,6 +30,7 @@ import numpy as np
 
 from silbridge.shm.records import Kind, empty
 from silbridge.tools.logs.mcap_log import TIMING_DTYPE
+from silbridge.shm.records import NS_PER_S
 
 SYNTH_STATUS_DTYPE = np.dtype([
     ("sim_ns", "<i8"), ("q_est_wxyz", "<f4", (4,)), ("euler_est_rad", "<f4", (3,)),
@@ -61,131 +63,177 @@ class SyntheticRun:
     physics_hz: float
 
 
-def _ticks(rate_hz: float, duration_s: float) -> np.ndarray:
-    """Sample times k / rate for k = 1 .. duration * rate, as int64 ns (no float sums)."""
-    n = int(round(duration_s * rate_hz))
-    return (np.arange(1, n + 1, dtype=np.int64) * 1_000_000_000) // int(round(rate_hz))
+@dataclasses.dataclass(frozen=True)
+class RunSignals:
+    """What a synthetic run is made of: rates, the closed-form signals' constants, timing."""
 
+    duration_s: float = 12.0
+    imu_hz: float = 1000.0
+    physics_hz: float = 1000.0      # ground truth and /timing rows
+    pwm_hz: float = 400.0           # PWM and FC status rows
+    baro_hz: float = 100.0
+    mag_hz: float = 100.0
+    gnss_hz: float = 10.0
+    seed: int = 0
+    roll_cmd_deg: float = 0.0
+    roll_err_amp_deg: float = 2.0   # true roll - commanded roll: this amplitude ...
+    roll_err_hz: float = 0.5        # ... at this frequency
+    pwm_center_us: float = 1500.0
+    pwm_amp_us: float = 20.0
+    pwm_sine_hz: float = 1.0
+    pwm_ramp: bool = False          # motors ramp 1000 -> 2000 us instead of the sines
+    yaw_rate_rad_s: float = 0.01
+    cp_us: float = 0.77
+    cr_us: float = -0.25
+    cy_us: float = 1.5
+    sensor_latency_us: float = 20.0
+    end_to_end_us: float = 60.0
+    period_jitter_us: float = 5.0
+    wall_start_ns: int = 10**12
 
-def synthetic_run(duration_s: float = 12.0, *, imu_hz: float = 1000.0,
-                  physics_hz: float = 1000.0, pwm_hz: float = 400.0, baro_hz: float = 100.0,
-                  mag_hz: float = 100.0, gnss_hz: float = 10.0, seed: int = 0,
-                  roll_cmd_deg: float = 0.0, roll_err_amp_deg: float = 2.0,
-                  roll_err_hz: float = 0.5, pwm_center_us: float = 1500.0,
-                  pwm_amp_us: float = 20.0, pwm_sine_hz: float = 1.0, pwm_ramp: bool = False,
-                  yaw_rate_rad_s: float = 0.01, cp_us: float = 0.77, cr_us: float = -0.25,
-                  cy_us: float = 1.5, sensor_latency_us: float = 20.0,
-                  end_to_end_us: float = 60.0, period_jitter_us: float = 5.0,
-                  wall_start_ns: int = 10**12) -> SyntheticRun:
-    rng = np.random.default_rng(seed)
-    ch: dict[str, np.ndarray] = {}
-    roll_cmd = np.deg2rad(roll_cmd_deg)
-    amp = np.deg2rad(roll_err_amp_deg)
-    wall_per_sim = 0.01  # the loop runs at 100x real time: 1 s of sim takes 10 ms of wall
+    # The loop runs at 100x real time: 1 s of sim takes 10 ms of wall.
+    WALL_PER_SIM = 0.01
 
-    def wall(t_ns: np.ndarray) -> np.ndarray:
-        return wall_start_ns + (t_ns * wall_per_sim).astype(np.int64)
+    def ticks(self, rate_hz: float) -> np.ndarray:
+        """Sample times k / rate for k = 1 .. duration * rate, as int64 ns (no float sums)."""
+        n = int(round(self.duration_s * rate_hz))
+        return (np.arange(1, n + 1, dtype=np.int64) * NS_PER_S) // int(round(rate_hz))
 
-    def true_euler(t_ns: np.ndarray):
+    def wall(self, t_ns: np.ndarray) -> np.ndarray:
+        return self.wall_start_ns + (t_ns * self.WALL_PER_SIM).astype(np.int64)
+
+    def true_euler(self, t_ns: np.ndarray):
         t = t_ns * 1e-9
-        roll = roll_cmd + amp * np.sin(2 * np.pi * roll_err_hz * t)
-        return roll, np.zeros_like(t), yaw_rate_rad_s * t
+        roll = np.deg2rad(self.roll_cmd_deg) + np.deg2rad(self.roll_err_amp_deg) * np.sin(
+            2 * np.pi * self.roll_err_hz * t)
+        return roll, np.zeros_like(t), self.yaw_rate_rad_s * t
 
-    t = _ticks(imu_hz, duration_s)
-    imu = empty(Kind.IMU, len(t))
-    imu["seq"], imu["sim_ns"], imu["wall_ns"] = np.arange(len(t)), t, wall(t)
-    imu["accel_frd_m_s2"] = rng.normal(0.0, 0.05, (len(t), 3)) + [0.0, 0.0, -9.81]
-    imu["gyro_frd_rad_s"] = rng.normal(0.0, 0.002, (len(t), 3)) + [0.0, 0.0, yaw_rate_rad_s]
-    imu["temperature_c"] = 25.0
-    imu["samples_per_step"] = max(1, int(round(imu_hz / physics_hz)))
-    imu["sample_index"] = np.arange(len(t)) % imu["samples_per_step"]
-    ch["/imu"] = imu
-
-    for name, kind, rate in (("/baro", Kind.BARO, baro_hz), ("/mag", Kind.MAG, mag_hz),
-                             ("/gnss", Kind.GNSS, gnss_hz)):
-        t = _ticks(rate, duration_s)
+    def records(self, kind: Kind, t: np.ndarray) -> np.ndarray:
+        """Records of one kind at times t, numbered from 0, published at wall(t)."""
         rec = empty(kind, len(t))
-        rec["seq"], rec["sim_ns"], rec["wall_ns"] = np.arange(len(t)), t, wall(t)
-        ch[name] = rec
+        rec["seq"], rec["sim_ns"], rec["wall_ns"] = np.arange(len(t)), t, self.wall(t)
+        return rec
+
+
+def synthetic_run(duration_s: float = 12.0, **signals) -> SyntheticRun:
+    """Every channel of a run with known answers (module docstring); `signals` are the other
+    fields of RunSignals, by name."""
+    s = RunSignals(duration_s=duration_s, **signals)
+    rng = np.random.default_rng(s.seed)
+    ch = {"/imu": _imu(s, rng), **_slow_sensors(s, rng), **_ground_truth(s)}
+    t = s.ticks(s.pwm_hz)
+    motors = _motors_us(s, t)
+    ch["/pwm"] = _pwm(s, t, motors)
+    ch["/fc/status"] = _status(s, t, motors)
+    ch["/timing"] = _timing(s, ch["/pwm"]["sim_ns"])
+    return SyntheticRun(ch, _events(s.duration_s), _metadata(s), s.physics_hz)
+
+
+def _imu(s: RunSignals, rng) -> np.ndarray:
+    t = s.ticks(s.imu_hz)
+    imu = s.records(Kind.IMU, t)
+    imu["accel_frd_m_s2"] = rng.normal(0.0, 0.05, (len(t), 3)) + [0.0, 0.0, -9.81]
+    imu["gyro_frd_rad_s"] = rng.normal(0.0, 0.002, (len(t), 3)) + [0.0, 0.0, s.yaw_rate_rad_s]
+    imu["temperature_c"] = 25.0
+    imu["samples_per_step"] = max(1, int(round(s.imu_hz / s.physics_hz)))
+    imu["sample_index"] = np.arange(len(t)) % imu["samples_per_step"]
+    return imu
+
+
+def _slow_sensors(s: RunSignals, rng) -> dict[str, np.ndarray]:
+    ch = {name: s.records(kind, s.ticks(rate))
+          for name, kind, rate in (("/baro", Kind.BARO, s.baro_hz), ("/mag", Kind.MAG, s.mag_hz),
+                                   ("/gnss", Kind.GNSS, s.gnss_hz))}
     ch["/baro"]["pressure_pa"] = 101325.0 - 120.0 + rng.normal(0, 2.0, len(ch["/baro"]))
     ch["/mag"]["field_frd_gauss"] = [0.2, 0.0, 0.45]
     ch["/gnss"]["fix_type"], ch["/gnss"]["satellites"] = 3, 12
+    return ch
 
-    t = _ticks(physics_hz, duration_s)
-    roll, pitch, yaw = true_euler(t)
-    gta = empty(Kind.GT_ATT, len(t))
-    gta["seq"], gta["sim_ns"], gta["wall_ns"] = np.arange(len(t)), t, wall(t)
-    gta["q_wxyz"] = quat_from_euler(roll, pitch, yaw)
-    gta["rates_frd_rad_s"][:, 0] = amp * 2 * np.pi * roll_err_hz * np.cos(
-        2 * np.pi * roll_err_hz * t * 1e-9)
-    gta["rates_frd_rad_s"][:, 2] = yaw_rate_rad_s
+
+def _ground_truth(s: RunSignals) -> dict[str, np.ndarray]:
+    t = s.ticks(s.physics_hz)
+    gta = s.records(Kind.GT_ATT, t)
+    gta["q_wxyz"] = quat_from_euler(*s.true_euler(t))
+    gta["rates_frd_rad_s"][:, 0] = np.deg2rad(s.roll_err_amp_deg) * 2 * np.pi * s.roll_err_hz \
+        * np.cos(2 * np.pi * s.roll_err_hz * t * 1e-9)
+    gta["rates_frd_rad_s"][:, 2] = s.yaw_rate_rad_s
     gta["specific_force_frd_m_s2"] = [0.0, 0.0, -9.81]
-    ch["/gt_att"] = gta
-    gtn = empty(Kind.GT_NAV, len(t))
-    gtn["seq"], gtn["sim_ns"], gtn["wall_ns"] = np.arange(len(t)), t, wall(t)
+    gtn = s.records(Kind.GT_NAV, t)
     gtn["pos_ned_m"][:, 2] = -10.0
-    ch["/gt_nav"] = gtn
+    return {"/gt_att": gta, "/gt_nav": gtn}
 
-    t = _ticks(pwm_hz, duration_s)
-    if pwm_ramp:
-        motors = np.repeat(np.linspace(1000.0, 2000.0, len(t))[:, None], 4, axis=1)
-    else:
-        phase = np.arange(4) * np.pi / 2
-        motors = pwm_center_us + pwm_amp_us * np.sin(
-            2 * np.pi * pwm_sine_hz * (t * 1e-9)[:, None] + phase)
+
+def _motors_us(s: RunSignals, t: np.ndarray) -> np.ndarray:
+    """(n, 4) motor commands at the PWM ticks t: phased sines, or the ramp."""
+    if s.pwm_ramp:
+        return np.repeat(np.linspace(1000.0, 2000.0, len(t))[:, None], 4, axis=1)
+    phase = np.arange(4) * np.pi / 2
+    return s.pwm_center_us + s.pwm_amp_us * np.sin(
+        2 * np.pi * s.pwm_sine_hz * (t * 1e-9)[:, None] + phase)
+
+
+def _pwm(s: RunSignals, t: np.ndarray, motors: np.ndarray) -> np.ndarray:
     pwm = empty(Kind.PWM, len(t))
     pwm["seq"], pwm["sim_ns"] = np.arange(len(t)), t
-    pwm["wall_ns"] = wall(t) + int(end_to_end_us * 1e3)
+    pwm["wall_ns"] = s.wall(t) + int(s.end_to_end_us * 1e3)
     pwm["pwm_us"][:, :4] = np.round(motors)
     pwm["channel_count"], pwm["armed"] = 4, 1
     pwm["imu_sim_ns"] = t
-    ch["/pwm"] = pwm
+    return pwm
 
+
+def _status(s: RunSignals, t: np.ndarray, motors: np.ndarray) -> np.ndarray:
     st = np.zeros(len(t), dtype=SYNTH_STATUS_DTYPE)
-    roll, pitch, yaw = true_euler(t)
+    roll, pitch, yaw = s.true_euler(t)
     st["sim_ns"] = t
     st["q_est_wxyz"] = quat_from_euler(roll, pitch, yaw)
     st["euler_est_rad"] = np.stack([roll, pitch, yaw], axis=1)
-    st["att_target_rad"][:, 0] = roll_cmd
+    st["att_target_rad"][:, 0] = np.deg2rad(s.roll_cmd_deg)
     st["att_target_rad"][:, 2] = yaw
-    st["rate_frd_rad_s"][:, 2] = yaw_rate_rad_s
-    st["cp_us"], st["cr_us"], st["cy_us"] = cp_us, cr_us, cy_us
-    st["throttle_us"] = pwm_center_us
+    st["rate_frd_rad_s"][:, 2] = s.yaw_rate_rad_s
+    st["cp_us"], st["cr_us"], st["cy_us"] = s.cp_us, s.cr_us, s.cy_us
+    st["throttle_us"] = s.pwm_center_us
     st["motor_us"] = motors
     st["trust"], st["blend_w"] = 1.0, 0.0
     st["alt_est_m"] = st["alt_target_m"] = 10.0
-    st["trim_us"] = [pwm_center_us, 0.0]
-    ch["/fc/status"] = st
+    st["trim_us"] = [s.pwm_center_us, 0.0]
+    return st
 
-    t = _ticks(physics_hz, duration_s)
+
+def _timing(s: RunSignals, pwm_sim_ns: np.ndarray) -> np.ndarray:
+    t = s.ticks(s.physics_hz)
     k = np.arange(len(t))
-    period_ns = 1e9 / physics_hz * wall_per_sim
+    period_ns = 1e9 / s.physics_hz * s.WALL_PER_SIM
     tim = np.zeros(len(t), dtype=TIMING_DTYPE)
     tim["sim_ns"] = t
-    tim["imu_wall_ns"] = wall(t)
-    tim["consume_wall_ns"] = tim["imu_wall_ns"] + int(sensor_latency_us * 1e3)
+    tim["imu_wall_ns"] = s.wall(t)
+    tim["consume_wall_ns"] = tim["imu_wall_ns"] + int(s.sensor_latency_us * 1e3)
     # A PWM follows the steps whose time reaches a PWM tick.
     pwm_step = np.zeros(len(t), bool)
-    pwm_step[np.searchsorted(t, ch["/pwm"]["sim_ns"])] = True
-    tim["pwm_wall_ns"] = np.where(pwm_step, tim["imu_wall_ns"] + int(end_to_end_us * 1e3), 0)
+    pwm_step[np.searchsorted(t, pwm_sim_ns)] = True
+    tim["pwm_wall_ns"] = np.where(pwm_step, tim["imu_wall_ns"] + int(s.end_to_end_us * 1e3), 0)
     tim["loop_period_ns"] = np.round(
-        period_ns + period_jitter_us * 1e3 * np.sin(2 * np.pi * k / 97)).astype(np.int64)
-    ch["/timing"] = tim
+        period_ns + s.period_jitter_us * 1e3 * np.sin(2 * np.pi * k / 97)).astype(np.int64)
+    return tim
 
-    events = [(0, "mode", "takeoff", {}),
-              (int(2e9), "param", "ATC_RAT_RLL_D 0.004", {"name": "ATC_RAT_RLL_D", "value": 0.004}),
-              (int(min(10.0, duration_s / 2) * 1e9), "disturbance", "force on", {}),
-              (int(duration_s * 1e9), "check", "imu rate ok", {"ok": True})]
-    metadata = {
-        "config": {"imu_hz": imu_hz, "physics_hz": physics_hz, "pwm_hz": pwm_hz,
-                   "baro_hz": baro_hz, "mag_hz": mag_hz, "gnss_hz": gnss_hz,
-                   "duration_s": duration_s, "seed": seed, "transport": "shm",
+
+def _events(duration_s: float) -> list[tuple]:
+    return [(0, "mode", "takeoff", {}),
+            (int(2e9), "param", "ATC_RAT_RLL_D 0.004", {"name": "ATC_RAT_RLL_D", "value": 0.004}),
+            (int(min(10.0, duration_s / 2) * 1e9), "disturbance", "force on", {}),
+            (int(duration_s * 1e9), "check", "imu rate ok", {"ok": True})]
+
+
+def _metadata(s: RunSignals) -> dict:
+    return {
+        "config": {"imu_hz": s.imu_hz, "physics_hz": s.physics_hz, "pwm_hz": s.pwm_hz,
+                   "baro_hz": s.baro_hz, "mag_hz": s.mag_hz, "gnss_hz": s.gnss_hz,
+                   "duration_s": s.duration_s, "seed": s.seed, "transport": "shm",
                    "processes": 1, "mode": "lockstep"},
-        "scenario": {"name": "synthetic", "seed": seed},
+        "scenario": {"name": "synthetic", "seed": s.seed},
         "params": {"ATC_RAT_RLL_P": 0.135, "ATC_RAT_RLL_D": 0.0036, "MOT_PWM_MIN": 1000},
         "software": {"silbridge": "synthetic"},
     }
-    return SyntheticRun(ch, events, metadata, physics_hz)
 
 
 def step_slices(run: SyntheticRun) -> list[dict[str, np.ndarray]]:

@@ -61,7 +61,7 @@ from silbridge.tools.logs.log_format import (EVENTS_CHANNEL, KIND_CHANNELS, LOG_
                                         TIMING_CHANNEL, TIMING_DTYPE, LogError, to_json)
 from silbridge.tools.logs.log_reader import RunLog, read_log
 from silbridge.tools.logs.log_stream import ChannelStream
-from silbridge.tools.logs.mcap_writer import LibraryMcap, McapFile, NullMcap
+from silbridge.tools.logs.mcap_writer import LibraryMcap, McapFile, McapSink, NullMcap
 from silbridge.tools.logs.viz_log import VIZ_HZ_DEFAULT
 
 # The public face of the log package: one import for writers and readers.
@@ -110,6 +110,7 @@ class LogWriter:
             raise ValueError("viz_hz must be >= 0 (0: no viewable channels)")
         self.path = None if path is None else Path(path)
         library = f"silbridge-log/{LOG_FORMAT_VERSION}"
+        self._mcap: McapSink
         try:
             if path is None:       # a live view without a file
                 self._mcap = NullMcap()

@@ -1,63 +1,68 @@
-"""A minimal MCAP writer: unchunked records straight to the file, then the summary.
+"""Where a run log's MCAP bytes go: our unchunked writer, the mcap package's, or nowhere.
 
-Why not the `mcap` package's Writer for the default, uncompressed logs: it
-builds every record in a BytesIO, copies it out and then writes it: three
-copies of each batch message, about half a microsecond per physics step of
-a logged run (tools/logs/log_bench.py). Here a message record is one os.writev()
-of its header and the caller's buffers, gathered by the kernel, and every
-record is in the file when the call returns (a killed run keeps it).
+Three classes behind the same calls (`McapSink`); `LogWriter` (tools/logs/mcap_log.py)
+picks one at construction from its `compression` argument:
 
-What it writes (MCAP spec, mcap.dev/spec): magic, Header, then Schema,
-Channel, Message and Metadata records in call order; on finish, DataEnd and
-a summary section (schemas, channels, Statistics, MetadataIndex records and
-their SummaryOffsets), the Footer (summary CRC included) and the magic. No
-chunk or message indexes: readers scan the file linearly. The only chunks are
-the uncompressed one-channel chunks of `add_message_records` (the viewable
-per-sample channels, tools/logs/viz_log.py). The mcap package reads these files
-back (tests/tools/test_mcap_log.py).
+- `McapFile` (compression "none", the default and what every `--log` run writes): our own
+  writer, on the loop's path. The `mcap` package's Writer builds every record in a BytesIO,
+  copies it out and then writes it: three copies of each batch message, about half a
+  microsecond per physics step of a logged run (tools/logs/log_bench.py). Here a message
+  record is one os.writev() of its header and the caller's buffers, gathered by the kernel,
+  and every record is in the file when the call returns (a killed run keeps it).
+- `LibraryMcap` (compression "lz4" or "zstd", `LogWriter`'s public option and
+  `log_bench --compression`): the mcap package's Writer, because compressed chunks need its
+  chunk builder and its lz4/zstd codecs, which we do not write again. Not on any flight's
+  path: its per-message copies cost nothing that matters when compressing costs more.
+- `NullMcap`: a live view without a log file.
 
-`LibraryMcap` puts the `mcap` package's Writer behind the same four calls,
-for compressed (chunked) logs.
+So production needs both writers, for different files (unchunked vs compressed chunks);
+neither is a reference for the other. What checks McapFile's bytes is the mcap package's
+reader (tests/tools/test_mcap_log.py, tests/tools/test_viz_log.py).
+
+What McapFile writes (the bytes themselves: tools/logs/mcap_layout.py): magic, Header, then
+Schema, Channel, Message and Metadata records in call order; on finish, DataEnd and a summary
+section (schemas, channels, Statistics, MetadataIndex records and their SummaryOffsets), the
+Footer (summary CRC included) and the magic. No chunk or message indexes: readers scan the
+file linearly. The only chunks are the uncompressed one-channel chunks of
+`add_message_records` (the viewable per-sample channels, tools/logs/viz_log.py).
 """
 
 from __future__ import annotations
 
 import os
-import struct
-import zlib
+from typing import Protocol
 
 from mcap.writer import CompressionType, Writer
 
-MAGIC = b"\x89MCAP0\r\n"
-
-OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = \
-    0x01, 0x02, 0x03, 0x04, 0x05, 0x06
-OP_STATISTICS, OP_METADATA, OP_METADATA_INDEX, OP_SUMMARY_OFFSET, OP_DATA_END = \
-    0x0B, 0x0C, 0x0D, 0x0E, 0x0F
-
-_RECORD = struct.Struct("<BQ")           # opcode, content length
-_MESSAGE = struct.Struct("<BQHIQQ")      # record prefix + channel, sequence, log, publish time
-# record prefix + message start/end time, uncompressed size and CRC (0: not computed),
-# compression "" (length 0), records length
-_CHUNK = struct.Struct("<BQQQQIIQ")
+from silbridge.tools.logs.mcap_layout import (CHUNK_FIXED, CHUNK_HEAD, MAGIC, MESSAGE_FIXED,
+                                              MESSAGE_HEAD, OP_CHANNEL, OP_CHUNK,
+                                              OP_METADATA_INDEX, OP_MESSAGE, OP_SCHEMA,
+                                              OP_STATISTICS, channel_record, data_end_record,
+                                              footer_and_magic, header_record,
+                                              metadata_index_record, metadata_record,
+                                              schema_record, split_message_records,
+                                              statistics_record, summary_offset_record)
 
 
-def _string(s: str) -> bytes:
-    b = s.encode()
-    return struct.pack("<I", len(b)) + b
+class McapSink(Protocol):
+    """The calls LogWriter and the viewable channels make, whichever writer is behind them."""
 
+    def register_schema(self, name: str, encoding: str, data: bytes) -> int: ...
 
-def _bytes(b: bytes) -> bytes:
-    return struct.pack("<I", len(b)) + b
+    def register_channel(self, topic: str, message_encoding: str, schema_id: int,
+                         metadata: dict[str, str] | None = None) -> int: ...
 
+    def add_message(self, channel_id: int, log_time: int, publish_time: int, sequence: int,
+                    parts: list) -> None: ...
 
-def _string_map(d: dict[str, str]) -> bytes:
-    body = b"".join(_string(k) + _string(v) for k, v in d.items())
-    return _bytes(body)
+    def add_message_records(self, channel_id: int, records, count: int, start_ns: int,
+                            end_ns: int) -> None: ...
 
+    def add_metadata(self, name: str, data: dict[str, str]) -> None: ...
 
-def _record(opcode: int, content: bytes) -> bytes:
-    return _RECORD.pack(opcode, len(content)) + content
+    def finish(self) -> None: ...
+
+    def close(self) -> None: ...
 
 
 class McapFile:
@@ -75,7 +80,7 @@ class McapFile:
         self._chunks = 0
         self._start_ns: int | None = None
         self._end_ns = 0
-        self._write(MAGIC + _record(OP_HEADER, _string(profile) + _string(library)))
+        self._write(MAGIC + header_record(profile, library))
 
     def _write(self, data: bytes) -> None:
         self._write_all(data)
@@ -88,8 +93,7 @@ class McapFile:
 
     def register_schema(self, name: str, encoding: str, data: bytes) -> int:
         sid = len(self._schemas) + 1
-        rec = _record(OP_SCHEMA, struct.pack("<H", sid) + _string(name) + _string(encoding)
-                      + _bytes(data))
+        rec = schema_record(sid, name, encoding, data)
         self._schemas.append(rec)
         self._write(rec)
         return sid
@@ -97,8 +101,7 @@ class McapFile:
     def register_channel(self, topic: str, message_encoding: str, schema_id: int,
                          metadata: dict[str, str] | None = None) -> int:
         cid = len(self._channels) + 1
-        rec = _record(OP_CHANNEL, struct.pack("<HH", cid, schema_id) + _string(topic)
-                      + _string(message_encoding) + _string_map(metadata or {}))
+        rec = channel_record(cid, schema_id, topic, message_encoding, metadata or {})
         self._channels.append(rec)
         self._counts[cid] = 0
         self._write(rec)
@@ -108,7 +111,8 @@ class McapFile:
                     parts: list) -> None:
         """One Message record whose data is the concatenation of `parts` (bytes-like)."""
         size = sum(len(p) for p in parts)
-        head = _MESSAGE.pack(OP_MESSAGE, 22 + size, channel_id, sequence, log_time, publish_time)
+        head = MESSAGE_HEAD.pack(OP_MESSAGE, MESSAGE_FIXED + size, channel_id, sequence, log_time,
+                                 publish_time)
         total = len(head) + size
         written = os.writev(self._fd, [head, *parts])
         if written != total:  # a short write (rare, large records): finish it by hand
@@ -126,8 +130,7 @@ class McapFile:
         channels skip the chunk without parsing it (tools/logs/log_reader.py); no chunk
         index is written, so every reader scans the file and sees both kinds."""
         size = len(records)
-        head = _CHUNK.pack(OP_CHUNK, 8 + 8 + 8 + 4 + 4 + 8 + size, start_ns, end_ns, size, 0,
-                           0, size)
+        head = CHUNK_HEAD.pack(OP_CHUNK, CHUNK_FIXED + size, start_ns, end_ns, size, 0, 0, size)
         written = os.writev(self._fd, [head, records])
         if written != len(head) + size:
             self._write_all(b"".join([head, bytes(records)])[written:])
@@ -139,45 +142,38 @@ class McapFile:
         self._end_ns = max(self._end_ns, end_ns)
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
-        rec = _record(OP_METADATA, _string(name) + _string_map(data))
+        rec = metadata_record(name, data)
         self._metadata_index.append((self._pos, len(rec), name))
         self._write(rec)
 
     def finish(self) -> None:
-        self._write(_record(OP_DATA_END, struct.pack("<I", 0)))
+        self._write(data_end_record())
         summary_start = self._pos
         groups: list[tuple[int, bytes]] = [
             (OP_SCHEMA, b"".join(self._schemas)),
             (OP_CHANNEL, b"".join(self._channels)),
-            (OP_STATISTICS, _record(OP_STATISTICS, self._statistics())),
-            (OP_METADATA_INDEX, b"".join(
-                _record(OP_METADATA_INDEX, struct.pack("<QQ", off, length) + _string(name))
-                for off, length, name in self._metadata_index)),
+            (OP_STATISTICS, statistics_record(
+                self._messages, len(self._schemas), len(self._channels),
+                len(self._metadata_index), self._chunks, self._start_ns or 0, self._end_ns,
+                self._counts)),
+            (OP_METADATA_INDEX, b"".join(metadata_index_record(off, length, name)
+                                         for off, length, name in self._metadata_index)),
         ]
         summary = b""
         offsets = b""
         for opcode, data in groups:
             if data:
-                offsets += _record(OP_SUMMARY_OFFSET, struct.pack(
-                    "<BQQ", opcode, summary_start + len(summary), len(data)))
+                offsets += summary_offset_record(opcode, summary_start + len(summary), len(data))
                 summary += data
         offset_start = summary_start + len(summary)
         summary += offsets
-        footer_head = struct.pack("<BQQQ", OP_FOOTER, 20, summary_start, offset_start)
-        crc = zlib.crc32(footer_head, zlib.crc32(summary))
-        self._write(summary + footer_head + struct.pack("<I", crc) + MAGIC)
+        self._write(summary + footer_and_magic(summary_start, offset_start, summary))
         self._f.close()
 
     def close(self) -> None:
         """Close without a summary (the file then reads as cut short)."""
         if not self._f.closed:
             self._f.close()
-
-    def _statistics(self) -> bytes:
-        counts = b"".join(struct.pack("<HQ", cid, n) for cid, n in self._counts.items())
-        return struct.pack("<QHIIIIQQ", self._messages, len(self._schemas), len(self._channels),
-                           0, len(self._metadata_index), self._chunks, self._start_ns or 0,
-                           self._end_ns) + _bytes(counts)
 
 
 class LibraryMcap:
@@ -197,6 +193,14 @@ class LibraryMcap:
                     parts: list) -> None:
         self._w.add_message(channel_id, log_time=log_time, publish_time=publish_time,
                             sequence=sequence, data=b"".join(parts))
+
+    def add_message_records(self, channel_id: int, records, count: int, start_ns: int,
+                            end_ns: int) -> None:
+        """McapFile's ready Message records, handed to the library one message at a time
+        (it builds its own records, inside its compressed chunks)."""
+        for channel, sequence, log_time, publish_time, data in split_message_records(records):
+            self._w.add_message(channel, log_time=log_time, publish_time=publish_time,
+                                sequence=sequence, data=data)
 
     def finish(self) -> None:
         self._w.finish()

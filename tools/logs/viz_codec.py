@@ -4,8 +4,8 @@ A viewable channel carries one small message per sample (Foxglove's Plot
 panel plots one value per message), thousands per second; encoding each in
 Python would cost microseconds per sample. Every message here has a fixed
 size, so a batch of n messages is one numpy structured array of n rows, each
-row a complete MCAP Message record (opcode, length, channel, sequence, log
-and publish time, then the message bytes): constant bytes come from a
+row a complete MCAP Message record (its head as tools/logs/mcap_layout.py declares it,
+then the message bytes): constant bytes come from a
 template row, variable ones are whole-column assignments, and the n records
 go to the file as one buffer.
 
@@ -25,12 +25,9 @@ from __future__ import annotations
 import numpy as np
 
 from silbridge.tools.logs.log_schema import CDR_HEADER
-
-OP_MESSAGE = 0x05
-# opcode, record length, channel id, sequence, log time, publish time (MCAP spec).
-_RECORD_HEAD = [("op", "u1"), ("length", "<u8"), ("channel", "<u2"), ("sequence", "<u4"),
-                ("log_time", "<u8"), ("publish_time", "<u8")]
-RECORD_HEAD_SIZE = 31
+from silbridge.tools.logs.mcap_layout import (MESSAGE_HEAD, MESSAGE_HEAD_FIELDS, OP_MESSAGE,
+                                              RECORD_PREFIX)
+from silbridge.shm.records import NS_PER_S
 
 _TIME_DEF = "MSG: builtin_interfaces/msg/Time\nint32 sec\nuint32 nanosec\n"
 
@@ -108,7 +105,7 @@ class FixedMessage:
     _CODES = {"f8": "<f8", "i4": "<i4", "u4": "<u4", "v5": ("u1", (5,))}
 
     def __init__(self, items: list):
-        fields, template = list(_RECORD_HEAD), {}
+        fields, template = list(MESSAGE_HEAD_FIELDS), {}
         for i, (kind, x) in enumerate(items):
             if kind == "const":
                 name = f"_c{i}"
@@ -118,13 +115,13 @@ class FixedMessage:
                 fields.append((x, self._CODES[kind]))
         self.dtype = np.dtype(fields)                  # packed: a record is its bytes
         self.size = self.dtype.itemsize
-        self.data_size = self.size - RECORD_HEAD_SIZE
+        self.data_size = self.size - MESSAGE_HEAD.size
         self.v5 = {x for k, x in items if k == "v5"}
         row = np.zeros(1, dtype=self.dtype)
         for name, value in template.items():
             row[name] = np.frombuffer(value, dtype=f"V{len(value)}")[0]
         row["op"] = OP_MESSAGE
-        row["length"] = self.size - 9                  # after opcode and length
+        row["length"] = self.size - RECORD_PREFIX.size   # after opcode and length
         self._template = row
 
     def encode(self, channel_id: int, first_seq: int, sim_ns: np.ndarray, values: dict):
@@ -136,7 +133,7 @@ class FixedMessage:
         t = np.maximum(np.asarray(sim_ns, dtype=np.int64), 0)
         out["log_time"] = t
         out["publish_time"] = t
-        sec, nsec = np.divmod(t, 1_000_000_000)
+        sec, nsec = np.divmod(t, NS_PER_S)
         for name, col in (("sec", sec), ("nsec", nsec)):
             if name in self.v5:
                 put_varint5(out[name], col)
@@ -148,4 +145,4 @@ class FixedMessage:
 
     def data_of(self, records: np.ndarray) -> np.ndarray:
         """(n, data_size) uint8: the message bytes of each record (for the live view)."""
-        return records.view(np.uint8).reshape(len(records), self.size)[:, RECORD_HEAD_SIZE:]
+        return records.view(np.uint8).reshape(len(records), self.size)[:, MESSAGE_HEAD.size:]

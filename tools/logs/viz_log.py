@@ -30,19 +30,19 @@ messages can also go to a live view (tools/logs/live_view.py).
 
 from __future__ import annotations
 
-import struct
 import time
 
 import numpy as np
 
-from silbridge.tools.logs.viz_codec import (FixedMessage, cdr_items, pb_doubles, pb_message, pb_string,
-                        pb_timestamp, ros2msg_text)
+from silbridge.tools.logs.mcap_layout import message_records
+from silbridge.tools.logs.viz_codec import (FixedMessage, cdr_items, pb_doubles, pb_message,
+                                            pb_string, pb_timestamp, ros2msg_text)
 from silbridge.tools.logs.viz_frames import euler_from_quat, ned_to_enu, q_enu_flu, quat_from_euler
+from silbridge.shm.records import NS_PER_S as _NS
 
 VIZ_HZ_DEFAULT = 1000.0
 VIEW3D_HZ = 100.0       # transforms and poses: smooth in the 3D panel, a tenth of the cost
 SCENE_HZ = 10.0         # the scene only moves its force arrows
-_NS = 1_000_000_000
 
 # Plot channels: topic -> (schema name, source channel, [(field, meaning), ...]).
 PLOTS = {
@@ -168,7 +168,7 @@ class _Placed:
 class VizChannels:
     """Turns emitted batches into viewable channels (see the module docstring).
 
-    mcap: the log's McapFile / LibraryMcap (None: live view only);
+    mcap: the log's McapFile / LibraryMcap (tools/logs/mcap_writer.py; None: live view only);
     live: a tools.live_view.LiveView or None; metadata: the run's start metadata
     (the scenario's forces for the arrows); viz_hz: messages per second of the
     per-sample channels, at most."""
@@ -309,8 +309,7 @@ class VizChannels:
         self._seq[topic] = seq + len(recs)
         t0, t1 = max(int(sim_ns[0]), 0), max(int(sim_ns[-1]), 0)
         if self._mcap is not None:
-            _add_records(self._mcap, self._ids[topic], recs.tobytes(), len(recs), t0, t1, seq,
-                         lambda: zip(recs["log_time"].tolist(), fixed.data_of(recs)))
+            self._mcap.add_message_records(self._ids[topic], recs.tobytes(), len(recs), t0, t1)
         if self._live is not None:
             ch = self._live_ch[topic]
             for ns, data in zip(recs["log_time"].tolist(), fixed.data_of(recs)):
@@ -322,10 +321,8 @@ class VizChannels:
         times = np.maximum(sim_ns, 0).tolist()
         if self._mcap is not None:
             cid = self._ids[topic]
-            raw = b"".join(_MSG_HEAD.pack(5, 22 + len(d), cid, (seq + i) & 0xFFFFFFFF, ns, ns) + d
-                           for i, (ns, d) in enumerate(zip(times, datas)))
-            _add_records(self._mcap, cid, raw, len(datas), times[0], times[-1], seq,
-                         lambda: zip(times, datas))
+            self._mcap.add_message_records(cid, message_records(cid, seq, times, datas),
+                                           len(datas), times[0], times[-1])
         if self._live is not None:
             ch = self._live_ch[topic]
             for ns, d in zip(times, datas):
@@ -340,19 +337,6 @@ class VizChannels:
             self._closed = True
 
 
-_MSG_HEAD = struct.Struct("<BQHIQQ")
-
-
 def _pose_columns(pos, q) -> dict:
     return {"tx": pos[:, 0], "ty": pos[:, 1], "tz": pos[:, 2],
             "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2], "qz": q[:, 3]}
-
-
-def _add_records(mcap, channel_id, raw, count, t0, t1, seq, messages) -> None:
-    """Many ready Message records in one write (McapFile, as one chunk), else one by one."""
-    add = getattr(mcap, "add_message_records", None)
-    if add is not None:
-        add(channel_id, raw, count, t0, t1)
-        return
-    for i, (ns, data) in enumerate(messages()):
-        mcap.add_message(channel_id, ns, ns, (seq + i) & 0xFFFFFFFF, [bytes(data)])

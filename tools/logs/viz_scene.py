@@ -27,6 +27,7 @@ import numpy as np
 
 from silbridge.tools.logs.viz_codec import pb_tag, varint
 from silbridge.tools.logs.viz_frames import frd_to_flu, ned_to_enu, quat_x_to
+from silbridge.shm.records import NS_PER_S
 
 ARM_M = 0.225            # motor to centre (450 mm diagonal)
 ROTOR_D_M = 0.254        # 10-inch propeller
@@ -74,7 +75,7 @@ def _length_delimited(field: int, data: bytes) -> bytes:
 def _stamp(ns: int) -> bytes:
     """A SceneEntity holding only its timestamp (field 1, google.protobuf.Timestamp:
     seconds 1, nanos 2; zeros left out as proto3 encoders do)."""
-    sec, nsec = divmod(ns, 1_000_000_000)
+    sec, nsec = divmod(ns, NS_PER_S)
     ts = (pb_tag(1, 0) + varint(sec) if sec else b"") + (pb_tag(2, 0) + varint(nsec)
                                                           if nsec else b"")
     return _length_delimited(1, ts)

@@ -13,8 +13,7 @@ from __future__ import annotations
 from silbridge.bridge.scenario import load_scenario
 from silbridge.fc_sil.param_schedule import ParamEvent, format_param_at
 from silbridge.fc_sil.params import lookup
-
-_NS = 1_000_000_000
+from silbridge.shm.records import NS_PER_S as _NS
 
 
 def check_fc_param(name: str, value) -> None:

@@ -17,7 +17,7 @@ import sys
 import tempfile
 from dataclasses import dataclass
 
-from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
+from silbridge.bridge.bridge_driver import BridgeRunConfig, prepare_segment, run_bridge
 from silbridge.bridge.simulator import Simulator
 from silbridge.fc_sil.sim_notice import NoticeWriter
 
@@ -97,9 +97,8 @@ def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
     from silbridge.fc_sil.autoflight import AutoFlight
     from silbridge.fc_sil.flight_core import FlightCore
     from silbridge.fc_sil.param_schedule import ParamSchedule
-    from silbridge.fc_sil.runtime import FcLoop
-
-    from silbridge.tools.benchmark.ablation import feature_params
+    from silbridge.fc_sil.params import feature_params
+    from silbridge.fc_sil.fc_loop import FcLoop
 
     core = FlightCore()
     overrides = {**(params or {}), **feature_params(features_off)}
@@ -228,7 +227,7 @@ def segment_unlinker(seg):
 
 def _end_fields(res) -> dict:
     """What the log's closing summary says about how the run ended (and, in real time, the
-    achieved rates: bridge/runner_main.rates_summary)."""
+    achieved rates: bridge/bridge_driver.rates_summary)."""
     if res is None:
         return {"interrupted": STOP.name} if STOP.requested else {}
     rates = {"rates": res.rates} if res.rates else {}
@@ -373,7 +372,7 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         "checks": [{"name": c.name, "ok": c.ok, "detail": c.detail} for c in res.checks],
         "late_steps": res.late_steps,
         # Achieved rates, late steps, the worst late stretch and whether the host kept up
-        # (bridge/runner_main.rates_summary); real-time benchmarks leave "degraded" runs out.
+        # (bridge/bridge_driver.rates_summary); real-time benchmarks leave "degraded" runs out.
         "rates": res.rates,
         # The signal that ended the run early ("SIGINT"/"SIGTERM"), else None.
         "interrupted": res.interrupted,

@@ -20,7 +20,7 @@ ignores nothing for SIGTERM: the process just dies, leaving its segment.
   every half second (tools/logs/mcap_log.py) and `silbridge analyze` reads an
   unfinished log.
 
-The loops themselves (bridge/runner_main.py, fc_sil/runtime.py) only read a
+The loops themselves (bridge/bridge_driver.py, fc_sil/fc_loop.py) only read a
 `requested` attribute of whatever stop object they are given; they import
 nothing from here.
 """

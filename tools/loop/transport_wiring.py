@@ -77,7 +77,7 @@ def fc_cli_args(transport: str, seg) -> list[str]:
 def in_process_poll(fc, fc_seg, seg, sim, lockstep: bool):
     """fc_poll for `fly --processes 1`. Over HIL the step's frames cross a socket, so in
     lockstep wait for them (and for the answer) instead of racing the kernel."""
-    if isinstance(seg, Segment) or not lockstep:
+    if fc.polls_in_c or not lockstep:       # shared memory: the records are there at once
         return fc.poll
 
     def poll() -> None:

@@ -29,8 +29,8 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from silbridge.shm.records import NS_PER_S as _NS
 
-_NS = 1_000_000_000
 PWM_HZ = 400.0
 PWM_TOLERANCE = 0.005        # PWM within 0.5 % of 400 Hz
 IMU_TOLERANCE = 0.005        # the IMU must also arrive at >= 99.5 % of the requested rate
@@ -139,7 +139,7 @@ class PwmClock:
 def fc_child(transport: str, instance: str, hil_addr: str | None,
              attach_timeout_s: float = 15.0) -> dict:
     """One step on the FC side (in the FC child): attach, run the real FC until STOP, measure."""
-    from silbridge.fc_sil.runtime import run_fc
+    from silbridge.fc_sil.fc_loop import run_fc
     from silbridge.shm import lockstep as ls
 
     from silbridge.tools.loop.flight import make_fc_loop
@@ -178,8 +178,8 @@ def run_step(transport: str, imu_hz: int, duration_s: float, fc,
              step_no: int | None = None) -> dict:
     """One IMU step: a fresh simulator and segment here, the FC in the FcChild `fc`.
     step_no (default: the child's next) names the step in the protocol and the segment."""
-    from silbridge.bridge.runner_errors import BridgeError
-    from silbridge.bridge.runner_main import BridgeRunConfig, prepare_segment, run_bridge
+    from silbridge.bridge.errors import BridgeError
+    from silbridge.bridge.bridge_driver import BridgeRunConfig, prepare_segment, run_bridge
     from silbridge.shm import Segment
 
     from silbridge.tools.loop.flight import FlightOptions, make_simulator
@@ -253,7 +253,7 @@ def step_figures(imu_hz: int, res, clock: PwmClock, fc: dict) -> dict:
         "pwm_ok": pwm_ok,
         "ok": bool(pwm_ok and imu_ok and drop == 0.0),
         "late_steps": res.late_steps,
-        # The bridge's own account (bridge/runner_main.rates_summary): what the simulator
+        # The bridge's own account (bridge/bridge_driver.rates_summary): what the simulator
         # published, its late steps and worst late stretch, and its rate watch's verdict.
         "sim_rates": res.rates,
         "wall_s": res.wall_s,

@@ -92,7 +92,7 @@ def serve_fc(inp=None, proto=None) -> int:
 
 def _serve_fc(inp, proto) -> int:
     # Import the FC's modules before saying ready: no step pays for them.
-    from silbridge.fc_sil import runtime  # noqa: F401
+    from silbridge.fc_sil import fc_loop  # noqa: F401
     from silbridge.mavlink.hil import hil_transport  # noqa: F401
 
     from silbridge.tools.loop import flight  # noqa: F401
@@ -125,7 +125,7 @@ def serve_runner(steps: list[int], duration_s: float, fastcrc: bool, inp=None,
 def _serve_runner(steps: list[int], duration_s: float, fastcrc: bool, inp, proto) -> int:
     with FcChild(fastcrc, wait=False) as fc:       # it starts while this process imports
         # Everything a step needs is imported before saying ready: no measurement pays for it.
-        import silbridge.bridge.runner_main  # noqa: F401
+        import silbridge.bridge.bridge_driver  # noqa: F401
         import silbridge.mavlink.hil.hil_transport  # noqa: F401
 
         from silbridge.tools.loop import flight  # noqa: F401

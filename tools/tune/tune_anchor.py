@@ -1,7 +1,7 @@
 """The anchor: ArduCopter's own AUTOTUNE, flown on our physics, and its gains.
 
 A fresh ArduCopter SITL (the real binary, `--model JSON`, as `bench --fc
-ardupilot` runs it: tools/autopilots/sitl_ardupilot.py) takes off in GUIDED to the
+ardupilot` runs it: tools/autopilots/ardupilot/sitl.py) takes off in GUIDED to the
 scenario's altitude; then, as a pilot would, the driver centres the sticks
 with RC_CHANNELS_OVERRIDE (throttle mid = hold altitude in AltHold-based
 modes), switches to AUTOTUNE (mode 15, AUTOTUNE_AXES roll+pitch by default)
@@ -19,22 +19,17 @@ import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.bridge.ardupilot_json import sitl_port
-from silbridge.bridge.ardupilot_physics import ArduPilotPhysics
-from silbridge.bridge.ardupilot_server import JsonPhysicsServer
+from silbridge.bridge.autopilots.ardupilot.json_protocol import sitl_port
+from silbridge.bridge.autopilots.ardupilot.physics import ArduPilotPhysics
+from silbridge.bridge.autopilots.ardupilot.server import JsonPhysicsServer
 from silbridge.bridge.link_spin import spin_budget_us
 
-from silbridge.tools.autopilots.ardupilot_log import AttitudeTarget
+from silbridge.tools.autopilots.ardupilot.driver import MavlinkDriver
+from silbridge.tools.autopilots.ardupilot.sitl import (ARDUCOPTER, SitlError, sitl_defaults,
+                                                       start_sitl, write_defaults)
+from silbridge.tools.autopilots.common.log_sink import AttitudeTarget
+from silbridge.tools.autopilots.common.run import AutopilotRun, scenario_factory
 from silbridge.tools.tune.tune_defaults import AUTOTUNE_AGGR
-from silbridge.tools.autopilots.autopilot_run import AutopilotRun, scenario_factory
-from silbridge.tools.autopilots.sitl_ardupilot import (
-    ARDUCOPTER,
-    MavlinkDriver,
-    SitlError,
-    sitl_defaults,
-    start_sitl,
-    write_defaults,
-)
 
 COPTER_MODE_AUTOTUNE = 15
 COPTER_MODE_ALT_HOLD = 2     # AUTOTUNE is entered from a mode that allows it (not GUIDED)

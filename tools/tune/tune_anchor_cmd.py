@@ -20,7 +20,7 @@ from silbridge.tools.tune.tune_sysid import SweepConfig, TuneError
 def run_anchor(args, axes, base: dict, out_dir: Path, pool, say) -> dict:
     from silbridge.mavlink.gcs.params_file import load_parm
 
-    from silbridge.tools.autopilots.sitl_ardupilot import require_arducopter
+    from silbridge.tools.autopilots.ardupilot.sitl import require_arducopter
     from silbridge.tools.benchmark.table1 import markdown
     from silbridge.tools.tune.tune_anchor import (AXIS_BITS, for_our_fc, run_autotune,
                                                   within_documented)

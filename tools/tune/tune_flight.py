@@ -19,8 +19,7 @@ import numpy as np
 
 from silbridge.tools.loop.flight import FlightOptions, bridge_config, make_fc_loop, make_simulator
 from silbridge.tools.loop.transport_wiring import bridge_segment, fc_segment, guard_fc, in_process_poll
-
-_NS = 1_000_000_000
+from silbridge.shm.records import NS_PER_S as _NS
 
 # Column names of FlightCapture.data, in FlightCore.sysid_sample order, then truth.
 SAMPLE_COLUMNS = (
@@ -65,7 +64,7 @@ class _Capture:
         fdm = sim.fdm
         self._h = [h.get_double_value for h in (fdm.h_p, fdm.h_q, fdm.h_r,
                                                 fdm.h_phi, fdm.h_theta, fdm.h_psi)]
-        self._inputs = core._c.inputs
+        self._inputs = core.inputs
 
     def after_batch(self, loop, recs, pwm, status) -> None:
         self.inner.after_batch(loop, recs, pwm, status)
@@ -106,7 +105,7 @@ def fly_captured(spec: CaptureSpec) -> FlightCapture:
                          processes=1, imu_hz=spec.imu_hz, seed=spec.seed,
                          instance=f"tune-{os.getpid()}-{id(spec) & 0xFFFF:x}",
                          params=dict(spec.params))
-    from silbridge.bridge.runner_main import prepare_segment, run_bridge
+    from silbridge.bridge.bridge_driver import prepare_segment, run_bridge
 
     sc, sim = make_simulator(opts)
     cfg = bridge_config(opts, sc)

@@ -1,0 +1,316 @@
+/*
+ * sensor_stage.c - see sensor_stage.h. One step: convert the FDM sample to SI truth,
+ * write the scalar IMU record, the ground truth, leave the state for Python, judge
+ * contact and crashes, then the baro and magnetometer records when due. The order of
+ * the records is the contract's (GNSS and SETPOINT follow from Python); every
+ * expression keeps the association of the Python oracle.
+ */
+#include "sensor_stage.h"
+
+#include <math.h>
+#include <string.h>
+
+#define SAMPLE(f) {#f, offsetof(sb_fdm_sample, f)}
+const sb_named_double SB_FDM_SAMPLE_FIELDS[SB_FDM_SAMPLE_FIELD_COUNT] = {
+    SAMPLE(p_rad_s), SAMPLE(q_rad_s), SAMPLE(r_rad_s),
+    SAMPLE(fbx_lbf), SAMPLE(fby_lbf), SAMPLE(fbz_lbf),
+    SAMPLE(phi_rad), SAMPLE(theta_rad), SAMPLE(psi_rad),
+    SAMPLE(vn_ft_s), SAMPLE(ve_ft_s), SAMPLE(vd_ft_s),
+    SAMPLE(lat_rad), SAMPLE(lon_rad), SAMPLE(hagl_ft),
+    {"omega1_rad_s", offsetof(sb_fdm_sample, omega_rad_s[0])},
+    {"omega2_rad_s", offsetof(sb_fdm_sample, omega_rad_s[1])},
+    {"omega3_rad_s", offsetof(sb_fdm_sample, omega_rad_s[2])},
+    {"omega4_rad_s", offsetof(sb_fdm_sample, omega_rad_s[3])},
+    SAMPLE(gear_contacts), SAMPLE(pressure_psf), SAMPLE(temperature_r)};
+#undef SAMPLE
+
+#define CONST(f) {#f, offsetof(sb_stage_consts, f)}
+#define IMU_CONST(f) {#f, offsetof(sb_stage_consts, imu.f)}
+const sb_named_double SB_STAGE_CONST_FIELDS[SB_STAGE_CONST_FIELD_COUNT] = {
+    CONST(lbf_to_m_s2), CONST(ft_m), CONST(psf_pa), CONST(lat0_rad), CONST(lon0_rad),
+    CONST(m_per_rad_lat), CONST(m_per_rad_lon), CONST(agl0_m), CONST(baro_alpha),
+    CONST(cos_crash_tilt), CONST(strike_agl_m),
+    IMU_CONST(dt_s), IMU_CONST(inv_omega_max2), IMU_CONST(vib_accel), IMU_CONST(vib_gyro),
+    IMU_CONST(range_accel), IMU_CONST(range_gyro)};
+#undef CONST
+#undef IMU_CONST
+
+/* Every double of the two structs is named once: a field added without a name fails here. */
+_Static_assert(sizeof(sb_fdm_sample) == SB_FDM_SAMPLE_FIELD_COUNT * sizeof(double),
+               "name every sb_fdm_sample field in SB_FDM_SAMPLE_FIELDS");
+_Static_assert(sizeof(sb_stage_consts) == SB_STAGE_CONST_FIELD_COUNT * sizeof(double),
+               "name every sb_stage_consts field in SB_STAGE_CONST_FIELDS");
+
+/* The sample in SI units and the frames the records carry. */
+typedef struct {
+    double w[3];       /* body rates FRD [rad/s] */
+    double af[3];      /* specific force FRD [m/s^2] */
+    double vel[3];     /* velocity NED [m/s] */
+    double pos[3];     /* position NED about home [m], down on the whole-mm grid */
+    double q[4];       /* attitude (w, x, y, z), w >= 0 */
+    double hagl_m;     /* CG height above ground */
+    int on_ground;
+} truth_t;
+
+void sb_sensor_stage_init(sb_sensor_stage *s, const sb_stage_consts *c, double *state,
+                          const double phase_rad[4], int64_t flip_steps, int scalar_imu,
+                          int on_ground)
+{
+    memset(s, 0, sizeof *s);
+    s->c = *c;
+    s->state = state;
+    memcpy(s->phase_rad, phase_rad, sizeof s->phase_rad);
+    s->flip_steps = flip_steps;
+    s->scalar_imu = scalar_imu;
+    s->was_on_ground = on_ground;
+}
+
+int sb_lowrate_start(sb_lowrate *lr, double rate_hz)
+{
+    if (!(rate_hz > 0.0))
+        return -1;
+    lr->rate_hz = rate_hz;
+    lr->m = 1;
+    lr->next_ns = sb_due_ns(1, rate_hz);
+    lr->on = 1;
+    return 0;
+}
+
+void sb_lowrate_set_noise(sb_lowrate *lr, const double *noise, size_t rows)
+{
+    lr->noise = noise;
+    lr->rows = rows;
+    lr->pos = 0;
+}
+
+void sb_sensor_stage_set_imu_noise(sb_sensor_stage *s, const double *noise,
+                                   const double *temp_c, size_t rows)
+{
+    s->imu_noise = noise;
+    s->imu_temp_c = temp_c;
+    s->imu_rows = rows;
+    s->imu_pos = 0;
+}
+
+const char *sb_sensor_stage_error(long code)
+{
+    switch (code) {
+    case SB_STAGE_NO_IMU_NOISE:
+        return "no IMU noise block: call set_block first";
+    case SB_STAGE_BUFFER_FULL:
+        return "step buffer too small for the ground truth, baro and mag records";
+    case SB_STAGE_NO_BARO_NOISE:
+        return "no baro noise: call set_baro_block first";
+    case SB_STAGE_NO_MAG_NOISE:
+        return "no mag noise: call set_mag_block first";
+    default:
+        return "unknown sensor stage error";
+    }
+}
+
+static void header(sb_record *r, uint16_t kind, uint32_t seq, int64_t sim_ns)
+{
+    r->h.kind = kind;
+    r->h.flags = 0;
+    r->h.seq = seq;
+    r->h.sim_ns = sim_ns;
+    r->h.wall_ns = 0;
+}
+
+/* JSBSim's feet, pounds and geodetic angles to SI truth in NED/FRD (and the baro lag). */
+static void to_truth(sb_sensor_stage *s, const sb_fdm_sample *in, truth_t *t)
+{
+    const sb_stage_consts *c = &s->c;
+    double *st = s->state;
+    t->w[0] = in->p_rad_s;
+    t->w[1] = in->q_rad_s;
+    t->w[2] = in->r_rad_s;
+    const double lbf = c->lbf_to_m_s2;
+    t->af[0] = in->fbx_lbf * lbf;
+    t->af[1] = in->fby_lbf * lbf;
+    t->af[2] = in->fbz_lbf * lbf;
+    const double ft = c->ft_m;
+    t->vel[0] = in->vn_ft_s * ft;
+    t->vel[1] = in->ve_ft_s * ft;
+    t->vel[2] = in->vd_ft_s * ft;
+    t->hagl_m = in->hagl_ft * ft;
+    t->on_ground = in->gear_contacts > 0.0;
+    st[ST_BARO_PA] += c->baro_alpha * (in->pressure_psf * c->psf_pa - st[ST_BARO_PA]);
+    sb_quat_from_euler(in->phi_rad, in->theta_rad, in->psi_rad, t->q);
+    t->pos[0] = (in->lat_rad - c->lat0_rad) * c->m_per_rad_lat;
+    t->pos[1] = (in->lon_rad - c->lon0_rad) * c->m_per_rad_lon;
+    t->pos[2] = sb_quant_down_m(c->agl0_m - t->hagl_m);
+}
+
+/* The one-per-step IMU sample into *r, from the next noise row. */
+static long write_imu(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t *t,
+                      sb_record *r, int64_t sim_ns)
+{
+    if (s->imu_noise == NULL || s->imu_pos >= s->imu_rows)
+        return SB_STAGE_NO_IMU_NOISE;
+    long flags = 0;
+    const double *stoch = s->imu_noise + 6 * s->imu_pos;
+    const double temp_c = s->imu_temp_c[s->imu_pos];
+    if (++s->imu_pos >= s->imu_rows)
+        flags |= F_BLOCK_DONE;
+    double out[6];
+    sb_imu_scalar(&s->c.imu, t->af, t->w, in->omega_rad_s, s->phase_rad, stoch,
+                  s->injected_rad_s, out);
+    s->state[ST_TEMP_C] = temp_c;
+    header(r, SB_KIND_IMU, s->seq_imu++, sim_ns);
+    for (int i = 0; i < 3; i++) {
+        r->u.imu.accel_frd_m_s2[i] = (float)out[i];
+        r->u.imu.gyro_frd_rad_s[i] = (float)out[i + 3];
+    }
+    r->u.imu.temperature_c = (float)temp_c;
+    r->u.imu.sample_index = 0;
+    r->u.imu.samples_per_step = 1;
+    r->u.imu.reserved = 0;
+    return flags;
+}
+
+/* GT_ATT then GT_NAV into ra, rn. */
+static void write_truth(sb_sensor_stage *s, const truth_t *t, sb_record *ra, sb_record *rn,
+                        int64_t sim_ns)
+{
+    header(ra, SB_KIND_GT_ATT, s->seq_att++, sim_ns);
+    for (int i = 0; i < 4; i++)
+        ra->u.gt_att.q_wxyz[i] = (float)t->q[i];
+    for (int i = 0; i < 3; i++) {
+        ra->u.gt_att.rates_frd_rad_s[i] = (float)t->w[i];
+        ra->u.gt_att.specific_force_frd_m_s2[i] = (float)t->af[i];
+    }
+    header(rn, SB_KIND_GT_NAV, s->seq_nav++, sim_ns);
+    memset(rn->u.raw, 0, sizeof rn->u.raw);
+    for (int i = 0; i < 3; i++) {
+        rn->u.gt_nav.pos_ned_m[i] = t->pos[i];
+        /* Truth as HIL_STATE_QUATERNION carries it (whole mm, whole cm/s) on every transport. */
+        rn->u.gt_nav.vel_ned_m_s[i] = (float)sb_quant_velocity_m_s(t->vel[i]);
+    }
+    rn->u.gt_nav.on_ground = (uint8_t)t->on_ground;
+}
+
+/* The state Python's low-rate sensors, summaries and the block IMU path read. */
+static void leave_state(double *st, const sb_fdm_sample *in, const truth_t *t)
+{
+    for (int i = 0; i < 3; i++) {
+        st[ST_W + i] = t->w[i];
+        st[ST_F + i] = t->af[i];
+        st[ST_VEL + i] = t->vel[i];
+    }
+    st[ST_EULER] = in->phi_rad;
+    st[ST_EULER + 1] = in->theta_rad;
+    st[ST_EULER + 2] = in->psi_rad;
+    st[ST_LAT] = in->lat_rad;
+    st[ST_LON] = in->lon_rad;
+    st[ST_HAGL] = t->hagl_m;
+    for (int i = 0; i < 4; i++)
+        st[ST_OMEGA + i] = in->omega_rad_s[i];
+    st[ST_ON_GROUND] = t->on_ground;
+}
+
+/* Ground contact and crash detection; Python words the messages. */
+static long contact_and_crash(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t *t)
+{
+    double *st = s->state;
+    long flags = 0;
+    st[ST_PREV_VD] = s->prev_vd_m_s;
+    if (t->on_ground != s->was_on_ground) {
+        flags |= F_GROUND_CHANGED;
+        s->was_on_ground = t->on_ground;
+    }
+    s->prev_vd_m_s = t->vel[2];
+    const double cos_tilt = 1.0 - 2.0 * (t->q[1] * t->q[1] + t->q[2] * t->q[2]);
+    st[ST_COS_TILT] = cos_tilt;
+    if (t->on_ground && cos_tilt < s->c.cos_crash_tilt)
+        flags |= F_TIPPED;
+    if (cos_tilt < 0.0) {
+        if (++s->upside_down_steps >= s->flip_steps)
+            flags |= F_FLIPPED;
+    } else {
+        s->upside_down_steps = 0;
+    }
+    if (t->hagl_m < s->c.strike_agl_m && sb_rotor_strike(in->phi_rad, in->theta_rad, t->hagl_m))
+        flags |= F_ROTOR_STRIKE;
+    return flags;
+}
+
+/* Start the record of a due low-rate sensor: its next noise row (NULL: none left, the
+ * caller's error), its next sample time, the record's header and a zeroed payload. */
+static const double *start_sample(sb_lowrate *lr, size_t width, long done_flag,
+                                  uint16_t kind, sb_record *r, int64_t sim_ns, long *flags)
+{
+    if (lr->pos >= lr->rows)
+        return NULL;
+    lr->next_ns = sb_due_ns(++lr->m, lr->rate_hz);
+    const double *n = lr->noise + width * lr->pos++;
+    if (lr->pos >= lr->rows)
+        *flags |= done_flag;
+    header(r, kind, lr->seq++, sim_ns);
+    memset(r->u.raw, 0, sizeof r->u.raw);
+    return n;
+}
+
+static long write_baro(sb_sensor_stage *s, const sb_fdm_sample *in, sb_record *r,
+                       int64_t sim_ns)
+{
+    long flags = 0;
+    const double *n =
+        start_sample(&s->baro, 1, F_BARO_BLOCK_DONE, SB_KIND_BARO, r, sim_ns, &flags);
+    if (n == NULL)
+        return SB_STAGE_NO_BARO_NOISE;
+    const double pa = s->state[ST_BARO_PA] + s->baro_offset_pa + s->baro_noise_pa * n[0];
+    r->u.baro.pressure_pa = (float)sb_quant_pressure_pa(pa);
+    r->u.baro.temperature_c = (float)(in->temperature_r / 1.8 - 273.15);
+    return flags;
+}
+
+static long write_mag(sb_sensor_stage *s, const sb_fdm_sample *in, sb_record *r,
+                      int64_t sim_ns)
+{
+    long flags = 0;
+    const double *n = start_sample(&s->mag, 3, F_MAG_BLOCK_DONE, SB_KIND_MAG, r, sim_ns, &flags);
+    if (n == NULL)
+        return SB_STAGE_NO_MAG_NOISE;
+    double b[3];
+    sb_ned_to_frd(in->phi_rad, in->theta_rad, in->psi_rad, s->mag_field_ned_gauss, b);
+    for (int i = 0; i < 3; i++)
+        r->u.mag.field_frd_gauss[i] =
+            (float)(b[i] + s->mag_offset_gauss[i] + s->mag_noise_gauss * n[i]);
+    return flags;
+}
+
+long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t sim_ns,
+                          sb_record *slots, size_t n_slots, size_t first)
+{
+    truth_t t;
+    to_truth(s, in, &t);
+    long flags = 0, f;
+    size_t slot = first;
+    if (s->scalar_imu) {
+        if ((f = write_imu(s, in, &t, &slots[slot++], sim_ns)) < 0)
+            return f;
+        flags |= f;
+    }
+    if (slot + 4 > n_slots)   /* GT_ATT, GT_NAV, and room for baro and mag */
+        return SB_STAGE_BUFFER_FULL;
+    write_truth(s, &t, &slots[slot], &slots[slot + 1], sim_ns);
+    slot += 2;
+    leave_state(s->state, in, &t);
+    flags |= contact_and_crash(s, in, &t);
+    if (s->baro.on && sim_ns >= s->baro.next_ns) {
+        if ((f = write_baro(s, in, &slots[slot++], sim_ns)) < 0)
+            return f;
+        flags |= f;
+    }
+    if (s->mag.on && sim_ns >= s->mag.next_ns) {
+        if ((f = write_mag(s, in, &slots[slot++], sim_ns)) < 0)
+            return f;
+        flags |= f;
+    }
+    if (sim_ns >= s->next_slow_ns)
+        flags |= F_SLOW_DUE;
+    else   /* nothing more this step: the last record closes it */
+        slots[slot - 1].h.flags = SB_FLAG_STEP_END;
+    return flags | (long)(slot - first);
+}
