@@ -8,7 +8,7 @@ from pathlib import Path
 
 # The commands the README and docs/ teach; each must be listed with its one-line summary.
 DOCUMENTED = ("bridge", "fc", "fly", "sitl", "bench", "ablate", "transport", "analyze",
-              "params", "shm-bench", "fc-bench", "clean", "tune", "soak")
+              "params", "shm-bench", "fc-bench", "clean", "tune", "soak", "speed")
 
 
 def test_help_lists_subcommands():

@@ -65,8 +65,9 @@ int sb_bell_wait(sb_doorbell *b, sb_ready_fn ready, const void *ctx, int64_t dea
 
 /* sched_yield until yield_end_ns (an idle core gives a wake-up within a microsecond or
  * two, cheaper than a futex wake on a VM), then sb_bell_wait. A yield that lets another
- * thread run (it takes > 30 us) means the machine is busy, where yielding keeps the core
- * from the peer: the next 1024 waits then block at once. */
+ * thread run (it takes > 30 us) and after which our data is still missing means our core
+ * is not free, where yielding keeps it from the peer: the next waits then block at once,
+ * 16 after one such finding, doubling while the findings repeat, up to 1024 (doorbell.c). */
 int sb_bell_wait_after_yield(sb_doorbell *b, sb_ready_fn ready, const void *ctx,
                              int64_t yield_end_ns, int64_t deadline_ns);
 

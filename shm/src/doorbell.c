@@ -37,31 +37,49 @@ int sb_bell_wait(sb_doorbell *b, sb_ready_fn ready, const void *ctx, int64_t dea
     }
 }
 
-/* A sched_yield that takes longer than this ran another thread: the machine is busy. */
+/* A sched_yield that takes longer than this ran another thread on our core. */
 #define SB_YIELD_BUSY_NS 30000LL
-/* After that, this many waits block at once without yielding first. */
-#define SB_YIELD_OFF_WAITS 1024
+/* Then the next waits block at once: this many after the first such yield, twice as many
+ * after each further one found by the next yielding wait, up to the most. One other
+ * thread's time slice on an idle machine (a shell, a kernel worker, the hypervisor) then
+ * costs ~16 futex hand-offs (~1-2 ms), not 1024 (~0.1 s); a lasting load still ends up
+ * probing once per 1024 waits. A yielding wait that finds the core free halves the count. */
+#define SB_YIELD_OFF_MIN 16
+#define SB_YIELD_OFF_MAX 1024
 
-/* Waits left that skip the yield phase (process-local: each process judges its own cores). */
+/* Process-local (each process judges its own core): the waits left that block at once,
+ * and how many the next busy finding buys. */
 static int yield_off_waits;
+static int yield_off_next = SB_YIELD_OFF_MIN;
+
+/* Yield until ready (1), the end (0) or a yield that ran another thread while our data did
+ * not come (-1). A slow yield after which the data is there ran the peer (the two of us
+ * share a core for a moment): that hand-off worked, and is not load. */
+static int yield_phase(sb_ready_fn ready, const void *ctx, int64_t end_ns)
+{
+    for (int64_t now = sb_monotonic_ns(); now < end_ns;) {
+        if (ready(ctx)) return 1;
+        sched_yield();
+        int64_t after = sb_monotonic_ns();
+        if (after - now > SB_YIELD_BUSY_NS) return ready(ctx) ? 1 : -1;
+        now = after;
+    }
+    return 0;
+}
 
 int sb_bell_wait_after_yield(sb_doorbell *b, sb_ready_fn ready, const void *ctx,
                              int64_t yield_end_ns, int64_t deadline_ns)
 {
     if (yield_off_waits > 0) {
         --yield_off_waits;
-    } else {
-        int64_t end = yield_end_ns < deadline_ns ? yield_end_ns : deadline_ns;
-        for (int64_t now = sb_monotonic_ns(); now < end;) {
-            if (ready(ctx)) return 1;
-            sched_yield();
-            int64_t after = sb_monotonic_ns();
-            if (after - now > SB_YIELD_BUSY_NS) {
-                yield_off_waits = SB_YIELD_OFF_WAITS;
-                break;
-            }
-            now = after;
-        }
+        return sb_bell_wait(b, ready, ctx, deadline_ns);
     }
-    return sb_bell_wait(b, ready, ctx, deadline_ns);
+    int r = yield_phase(ready, ctx, yield_end_ns < deadline_ns ? yield_end_ns : deadline_ns);
+    if (r < 0) {
+        yield_off_waits = yield_off_next;
+        if (yield_off_next < SB_YIELD_OFF_MAX) yield_off_next *= 2;
+    } else if (yield_off_next > SB_YIELD_OFF_MIN) {
+        yield_off_next /= 2;
+    }
+    return r > 0 ? 1 : sb_bell_wait(b, ready, ctx, deadline_ns);
 }

@@ -34,6 +34,7 @@ COMMANDS = {
     "params": "cmd_params",
     "shm-bench": "cmd_shm_bench",
     "fc-bench": "cmd_fc_bench",
+    "speed": "cmd_speed",
     "clean": "cmd_clean",
     "tune": "cmd_tune",
 }
