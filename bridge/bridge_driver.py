@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 from silbridge.shm import lockstep as ls
 
-from .bridge_loop import BridgeLoop, PeerWatch
+from .bridge_loop import BATCH_MAX_STEPS, BridgeLoop, PeerWatch
 from .errors import PeerLost, StartupCheckFailed
 from .pacing import Pacer
 from .rate_watch import RateShortfall, RateWatch
@@ -77,6 +77,7 @@ class BridgeResult:
     cpu_s: float = 0.0     # the bridge thread's CPU time in the loop (with an in-process FC: both)
     interrupted: str | None = None  # "SIGINT"/"SIGTERM" when a signal stopped the run early
     rates: dict = field(default_factory=dict)   # rates_summary(): achieved, late, degraded
+    steps_in_c: int = 0    # steps run in C batches with the in-process FC (the rest per step)
 
 
 class _NeverStop:
@@ -93,7 +94,7 @@ def prepare_segment(seg, sim, cfg: BridgeRunConfig) -> None:
 
 
 def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None, sink=None,
-               out=print, stop=_NeverStop, notify=None) -> BridgeResult:
+               out=print, stop=_NeverStop, notify=None, fc_loop=None) -> BridgeResult:
     """Run one flight; returns what the bridge measured. Raises a user-facing error on failure.
 
     stop: anything with a `requested` attribute (and `name`), read once per step; when it
@@ -104,6 +105,9 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
     STATUSTEXT of each reported rate shortfall and its figures, and once at the end with
     text None and the run's final figures (rates_summary). The bridge has no MAVLink: the
     caller passes them to the FC's vehicle.
+
+    fc_loop: the in-process FcLoop whose poll fc_poll is: in lockstep its C poll then runs
+    inside the bridge's batches of steps in C (_Flight.fly_batched), same trace.
     """
     loop = BridgeLoop(sim, seg, sink=sink, settle_s=cfg.settle_s,
                       trace=cfg.trace_hash)
@@ -115,8 +119,17 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
         return res
     flight = _Flight(loop, cfg, checks, fc_poll=fc_poll, peer_check=peer_check, sink=sink,
                      out=out, stop=stop, notify=notify)
+    batched = (fc_loop is not None and cfg.lockstep
+               and loop.bind_in_process_fc(fc_loop.batch_poll()))
+    batched_p2 = (not batched and fc_poll is None and cfg.lockstep
+                  and loop.bind_fc_process())
     try:
-        flight.fly()
+        if batched:
+            flight.fly_batched(fc_loop)
+        elif batched_p2:
+            flight.fly_batched_own_fc()
+        else:
+            flight.fly()
         rates = flight.finish()
     finally:
         seg.set_word(ls.STOP, ls.STOP_INTERRUPTED if flight.interrupted or stop.requested
@@ -128,6 +141,7 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
     res.cpu_s = cpu_s
     res.interrupted = flight.interrupted
     res.rates = rates
+    res.steps_in_c = flight.steps_in_c
     return res
 
 
@@ -179,6 +193,7 @@ class _Flight:
         self.window = None      # real time: (wall_ns, imu count, pwm count) at the last window
         self.lag_ns = late_lag_ns(seg, sim)
         self.interrupted = None     # the stop's name when a stop ended the run
+        self.steps_in_c = 0         # fly_batched: steps the C batches finished
         self.t0 = 0
         self.cpu0 = 0.0
         self.wall_ns = 0
@@ -224,6 +239,78 @@ class _Flight:
             if sim.crashed:
                 out(f"vehicle crashed at t={sim.sim_ns / _NS:.3f} s; run stopped")
                 break
+
+    def fly_batched(self, fc) -> None:
+        """fly() for an FC in this process in lockstep: the steps run in batches in C
+        (BridgeLoop.run_batch), each batch ending where Python has work: a step the kernel
+        flags (Python's part of it done in Simulator.step_batch), the FC's due polls
+        (fc.python_due), the first window's checks, the duration. A stop is seen between
+        batches (at most BATCH_MAX_STEPS steps, ~1 ms); a crash is flagged by the kernel, so
+        it ends its batch and the run at the crashing step."""
+        loop, cfg, sim = self.loop, self.cfg, self.loop.sim
+        stop = self.stop
+        last = self.steps[-1] if isinstance(self.steps, range) else math.inf
+        self.t0 = time.monotonic_ns()
+        self.cpu0 = time.thread_time()
+        k = 1
+        while k <= last:
+            if stop.requested:
+                self._stopped()
+                break
+            self.steps_in_c += loop.run_batch(self._batch_len(k, last, fc))
+            fc.after_c_polls(*loop.batch_polls())
+            k = sim.step_index + 1
+            if sim.step_index == self.check_step:
+                self.checks.extend(first_window_checks(loop, cfg, time.monotonic_ns() - self.t0,
+                                                       self.out, None))
+            if sim.crashed:
+                self.out(f"vehicle crashed at t={sim.sim_ns / _NS:.3f} s; run stopped")
+                break
+
+    def fly_batched_own_fc(self) -> None:
+        """fly() for an FC in its own process in lockstep: the steps run in batches in C, each
+        step waiting there for the FC's answer (BridgeLoop.bind_fc_process), each batch ending
+        at the 20 ms look at the FC (PeerWatch), the first window's checks, the duration. The
+        FC's own Python is its process's business. A step the FC did not answer within a
+        slice is finished by _wait_lockstep, which looks at the FC while it waits."""
+        loop, cfg, sim, stop, every = self.loop, self.cfg, self.loop.sim, self.stop, self.watch_every
+        last = self.steps[-1] if isinstance(self.steps, range) else math.inf
+        self.t0 = time.monotonic_ns()
+        self.cpu0 = time.thread_time()
+        k = 1
+        while k <= last:
+            if stop.requested:
+                self._stopped()
+                break
+            n = min(BATCH_MAX_STEPS, last - k + 1, every - (k - 1) % every)
+            if k <= self.check_step:
+                n = min(n, self.check_step - k + 1)
+            self.steps_in_c += loop.run_batch(n)
+            if loop.fc_pending:
+                loop.fc_pending = False
+                _wait_lockstep(loop, self.peer)
+            k = sim.step_index + 1
+            if sim.step_index % every == 0:
+                self._look()
+            if sim.step_index == self.check_step:
+                self.checks.extend(first_window_checks(loop, cfg, time.monotonic_ns() - self.t0,
+                                                       self.out, None))
+            if sim.crashed:
+                self.out(f"vehicle crashed at t={sim.sim_ns / _NS:.3f} s; run stopped")
+                break
+
+    def _batch_len(self, k: int, last, fc) -> int:
+        """Steps from step k the next batch may take: it ends at the first step whose end
+        Python must see. (In-process lockstep has no peer to watch nor rates to judge:
+        fly()'s 20 ms look is empty here.)"""
+        dt = self.loop.sim.dt_ns
+        n = min(BATCH_MAX_STEPS, last - k + 1)
+        if k <= self.check_step:
+            n = min(n, self.check_step - k + 1)
+        due_ns, polls = fc.python_due()
+        if due_ns < (k + n - 1) * dt:
+            n = max(1, min(n, -(-int(due_ns) // dt) - k + 1))
+        return max(1, min(n, polls))
 
     def _stopped(self) -> None:
         """A stop was requested: say where, in the output and the log."""

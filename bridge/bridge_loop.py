@@ -24,6 +24,7 @@ import numpy as np
 from silbridge.shm import lockstep as ls
 from silbridge.shm.records import PWM_DTYPE, RECORD_DTYPE, Kind, word_index
 
+from . import _step
 from .errors import PeerLost
 
 _NS = 1_000_000_000
@@ -36,6 +37,10 @@ _PWM_US_U16 = word_index(Kind.PWM, "pwm_us", 2)
 _ARMED_BYTE = word_index(Kind.PWM, "armed", 1)
 _SIM_NS_I64 = word_index(Kind.PWM, "sim_ns", 8)
 _WALL_NS_I64 = word_index(Kind.PWM, "wall_ns", 8)
+
+# The most steps one run_batch takes: what its trace buffer is sized for. Between two
+# batches Python looks at the stop request: 64 steps are ~1 ms of wall time.
+BATCH_MAX_STEPS = 64
 
 
 @dataclass
@@ -85,8 +90,12 @@ class BridgeLoop:
         self._set_word = segment.set_word
         self._word = segment.word
         self._hash_update = self._hash.update
+        self._io_stale = False      # the per-step path changed what the batch's words hold
+        self._rotor_rows = None
         # A sink may log the PWM elsewhere (the FC's side) and set pwm_records to None.
         self._log_pwm = getattr(sink, "pwm_records", None) if sink is not None else None
+        # A sink may log the rotor speeds after each step (tools/logs/rotor_log.py), or not.
+        self._log_rotor = getattr(sink, "rotor", None) if sink is not None else None
         raw = memoryview(self._pwm_buf.view(np.uint8))
         self._pwm_raw = raw
         self._pwm_u16 = raw.cast("H")
@@ -95,8 +104,13 @@ class BridgeLoop:
     # -- one step ---------------------------------------------------------
     def publish_step(self) -> np.ndarray:
         """Advance physics one step with the held PWM; publish its records."""
-        sim = self.sim
         recs = self._step(self.pwm_us)
+        self._publish(recs)
+        return recs
+
+    def _publish(self, recs: np.ndarray) -> None:
+        """The records of the step just taken: hashed, to the FC, and what the step logs."""
+        sim = self.sim
         if self._trace:
             self._hash_update(recs)
         # A refused push (non-overwriting ring, full) is counted by the ring as
@@ -104,15 +118,19 @@ class BridgeLoop:
         self._push(recs)
         sim_ns = sim.sim_ns
         self._set_word(ls.BRIDGE_SIM_NS, sim_ns)
-        events = sim.events
+        if self._log_rotor is not None:
+            self._log_rotor(sim_ns)
+        self._drain_events()
+        if sim.step_index % self.ERROR_SAMPLE_STEPS == 0 and sim_ns >= self.settle_ns:
+            self._sample_errors()
+
+    def _drain_events(self) -> None:
+        events = self.sim.events
         if events:
             if self.sink is not None:
                 for ev_ns, text in events:
                     self.sink.event(ev_ns, "disturbance", text)
             events.clear()
-        if sim.step_index % self.ERROR_SAMPLE_STEPS == 0 and sim_ns >= self.settle_ns:
-            self._sample_errors()
-        return recs
 
     def collect_pwm(self) -> int:
         """Drain the actuator ring; hold the newest command. Returns records read."""
@@ -133,6 +151,7 @@ class BridgeLoop:
         st.pwm_last_sim_ns = i64[last_row + _SIM_NS_I64]
         st.pwm_last_wall_ns = i64[last_row + _WALL_NS_I64]
         st.pwm_received += n
+        self._io_stale = True
         if self._log_pwm is not None:
             self._log_pwm(self._pwm_view[:n])
         # Hash without wall-clock stamps: only what lockstep makes deterministic.
@@ -141,6 +160,133 @@ class BridgeLoop:
                 i64[i * _SLOT_I64 + _WALL_NS_I64] = 0
             self._hash_update(self._pwm_raw[:n * _SLOT_BYTES])
         return n
+
+    # -- many steps: bridge and in-process FC in C -----------------------------
+    def bind_in_process_fc(self, fc_poll_c) -> bool:
+        """Let run_batch step bridge and FC together in C (`fly --processes 1` in lockstep):
+        fc_poll_c is the FC's C poll over this segment (FcLoop.batch_poll). False when this
+        run cannot: an oversampled IMU (numpy per step), or a sink that logs the PWM here."""
+        if fc_poll_c is None or not self.sim.batches or self._log_pwm is not None:
+            return False
+        self._bind_batches(self.seg.c_capsule(), fc_poll_c)
+        return True
+
+    def bind_fc_process(self) -> bool:
+        """run_batch for an FC in its own process (`fly --processes 2` in lockstep): each step
+        waits in C for the FC's answer (the lockstep hand-off, shm/include/sb_handoff.h). A
+        step not answered within a slice ends its batch unanswered (`fc_pending`): the
+        caller looks at the FC, then waits on and collects the Python way. False when this
+        run cannot: a link without a segment (HIL), an oversampled IMU, a PWM-logging sink,
+        a rotor log that takes one step at a time (tools/logs/rotor_log.py RotorSpool.rotor)."""
+        capsule = self.seg.c_capsule()
+        if capsule is None or not self.sim.batches or self._log_pwm is not None:
+            return False
+        hook = self._log_rotor      # rows after a batch need a hook that takes rows
+        if hook is not None and not (hasattr(hook, "write_rows") or hasattr(hook, "write")):
+            return False
+        self._bind_batches(capsule, None)
+        return True
+
+    def _bind_batches(self, capsule, fc_poll_c) -> None:
+        """The batch's buffers, bound to the kernel with the FC's C poll (None: its own
+        process)."""
+        sim = self.sim
+        self._fc_own_process = fc_poll_c is None
+        self.fc_pending = False
+        slots = len(sim.buffer.buf) // _SLOT_BYTES
+        self._trace_buf = np.zeros(BATCH_MAX_STEPS * (slots + 16) * _SLOT_BYTES, dtype=np.uint8)
+        self._trace_mv = memoryview(self._trace_buf)
+        self._io = np.zeros(_step.IO_WORDS, dtype=np.int64)
+        self._iow = memoryview(self._io)
+        self._iow[_step.IO_ERR_EVERY] = self.ERROR_SAMPLE_STEPS
+        self._iow[_step.IO_ERR_FROM_NS] = self.settle_ns
+        self._err = np.zeros(_step.ERR_COUNT)
+        self._errw = memoryview(self._err)
+        self._rotor_rows = (np.zeros((BATCH_MAX_STEPS, 4)) if self._log_rotor is not None
+                            else None)
+        sim.bind_lockstep(segment=capsule, fc_poll=fc_poll_c,
+                          trace=self._trace_buf, pwm=self._pwm_buf, io=self._io,
+                          errors=self._err, rotor=self._rotor_rows, bridge_word=ls.BRIDGE_SIM_NS,
+                          fc_word=ls.FC_SIM_NS)
+        self._io_stale = True
+
+    def run_batch(self, n: int) -> int:
+        """Up to n lockstep steps (at most BATCH_MAX_STEPS), each published, answered by
+        the in-process FC and its PWM collected, in C (bridge/src/step_batch.c): the same
+        records, hash, stamps, PWM and error samples as n rounds of publish_step, FC poll,
+        collect_pwm. Returns the steps done: fewer than n when a step needed Python (its
+        part runs in Simulator.step_batch), which then is the batch's last. The caller makes
+        every step whose end Python must see (checks, the FC's due polls) the last of one."""
+        if self._io_stale:
+            self._to_io()
+        k0 = self.sim.step_index
+        done = self.sim.step_batch(min(n, BATCH_MAX_STEPS))
+        w = self._iow
+        used = w[_step.IO_TRACE_BYTES]
+        if used and self._trace:
+            self._hash_update(self._trace_mv[:used])
+        if done:
+            self._from_io()
+            if self._rotor_rows is not None:
+                self._log_rotor_rows(k0, done)
+            if w[_step.IO_FC_MISSED]:
+                if not self._fc_own_process:
+                    raise PeerLost("the in-process FC did not answer a lockstep step")
+                self.fc_pending = True      # its answer is collected the Python way
+                self._io_stale = True
+        self._drain_events()
+        return done
+
+    def _log_rotor_rows(self, k0: int, done: int) -> None:
+        """The rotor speeds the batch left after each of its steps k0+1.., to the log's
+        /rotor channel (tools/logs/rotor_log.py): in one call where the log takes rows."""
+        rows, dt, hook = self._rotor_rows[:done], self.sim.dt_ns, self._log_rotor
+        write_rows = getattr(hook, "write_rows", None)
+        if write_rows is not None:
+            write_rows(np.arange(k0 + 1, k0 + 1 + done, dtype=np.int64) * dt, rows)
+            return
+        for i, row in enumerate(rows.tolist()):
+            hook.write((k0 + 1 + i) * dt, row)
+
+    def batch_polls(self) -> tuple[int, int]:
+        """FC polls that consumed records in the last run_batch, and the records the newest
+        consumed (FcLoop.after_c_polls)."""
+        return self._iow[_step.IO_POLLS], self._iow[_step.IO_LAST_POLL]
+
+    def _to_io(self) -> None:
+        """The held PWM and the PWM statistics, from the per-step path into the batch's words."""
+        w, st = self._iow, self.stats
+        for i, us in enumerate(self.pwm_us):
+            w[_step.IO_PWM_US + i] = int(us)
+        w[_step.IO_ARMED] = int(self.armed)
+        w[_step.IO_PWM_RECEIVED] = st.pwm_received
+        w[_step.IO_PWM_FIRST_SIM] = st.pwm_first_sim_ns
+        w[_step.IO_PWM_FIRST_WALL] = st.pwm_first_wall_ns
+        w[_step.IO_PWM_LAST_SIM] = st.pwm_last_sim_ns
+        w[_step.IO_PWM_LAST_WALL] = st.pwm_last_wall_ns
+        w[_step.IO_ERR_N] = self._n_err
+        self._errw[_step.ERR_ATT_SQ] = self._att_err_sq
+        self._errw[_step.ERR_ALT_SQ] = self._alt_err_sq
+        self._io_stale = False
+
+    def _from_io(self) -> None:
+        """The batch's words back into the held PWM, the statistics and the error sums."""
+        w, st = self._iow, self.stats
+        if w[_step.IO_ERR_N] != self._n_err:
+            e = self._errw
+            self._n_err = w[_step.IO_ERR_N]
+            self._att_err_sq = e[_step.ERR_ATT_SQ]
+            self._alt_err_sq = e[_step.ERR_ALT_SQ]
+        if w[_step.IO_PWM_RECEIVED] == st.pwm_received:
+            return
+        b = _step.IO_PWM_US
+        self.pwm_us = (w[b], w[b + 1], w[b + 2], w[b + 3])
+        self.armed = bool(w[_step.IO_ARMED])
+        st.pwm_received = w[_step.IO_PWM_RECEIVED]
+        st.pwm_first_sim_ns = w[_step.IO_PWM_FIRST_SIM]
+        st.pwm_first_wall_ns = w[_step.IO_PWM_FIRST_WALL]
+        st.pwm_last_sim_ns = w[_step.IO_PWM_LAST_SIM]
+        st.pwm_last_wall_ns = w[_step.IO_PWM_LAST_WALL]
 
     def fc_caught_up(self) -> bool:
         return self._word(ls.FC_SIM_NS) >= self.sim.sim_ns

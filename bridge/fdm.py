@@ -39,6 +39,10 @@ _RATE_ROT_AIR = 5
 LEG_BELOW_CG_M = 0.10    # quadx.xml: feet 0.10 m below the CG
 LEG_COUNT = 4
 LEG_SPRING_N_M = 2000.0  # quadx.xml spring_coeff per leg
+# The mass moved to place the CG off centre: the battery of quadx.xml's mass budget.
+_CG_MOVED_MASS_KG = 0.320
+_LBM_PER_SLUG = 32.174049   # pounds-mass per slug (standard gravity in ft/s^2)
+_IN_M = 0.0254              # m per inch
 # Rotor hubs in body FRD (quadx.xml: 0.1591 m along x and y, 0.03 m above the CG).
 ROTOR_HUBS_FRD_M = ((0.1591, 0.1591, -0.03), (-0.1591, -0.1591, -0.03),
                     (0.1591, -0.1591, -0.03), (-0.1591, 0.1591, -0.03))
@@ -101,18 +105,22 @@ class Fdm:
     Parameters: ``dt_s`` physics step; home latitude/longitude (deg), ground
     elevation above MSL (m) and heading (deg); ``initial_agl_m`` height of the
     feet above ground at start (0 = resting on the legs); ``random_seed`` for
-    JSBSim's own generator (turbulence).
+    JSBSim's own generator (turbulence); ``vehicle`` the vehicle's imperfections
+    (bridge/vehicle_draw.py; None or a neutral draw: the perfect quad, untouched).
     """
 
     def __init__(self, dt_s: float, lat_deg: float, lon_deg: float, ground_alt_m: float,
                  heading_deg: float, initial_agl_m: float = 0.0, random_seed: int = 0,
-                 model: str = "quadx"):
+                 model: str = "quadx", vehicle=None):
         self.fdm = self._load(dt_s, model)
         self.dt_s = dt_s
         self._model = model
         self.mass_kg = self.fdm["inertia/mass-slugs"] * SLUG_KG
         # Rest height of the CG: legs compressed by m g / (n k) (no bounce at step 1).
         self.rest_agl_m = LEG_BELOW_CG_M - self.mass_kg * G0_M_S2 / (LEG_COUNT * LEG_SPRING_N_M)
+        if vehicle is not None and vehicle.imperfect:
+            # Before the initial conditions: JSBSim places the CG, so the legs must know it.
+            self._apply_vehicle(vehicle)
         self._place(lat_deg, lon_deg, ground_alt_m, heading_deg, initial_agl_m, random_seed)
         self._air_integrator = False
         self._bind_handles()
@@ -130,6 +138,34 @@ class Fdm:
                 f"JSBSim could not load model {model!r} from {AIRCRAFT_DIR}; "
                 "check that the XML exists and is well formed")
         return fdm
+
+    def _apply_vehicle(self, v) -> None:
+        """The vehicle's imperfections as model parameters (see bridge/vehicle_draw.py).
+
+        CG: the battery's mass moved by d = offset m / w (quadx.xml's point-mass pair), so
+        the mass stays, the CG moves by the offset and the inertia changes as it would.
+        Coefficients: fcs/mN-kt-scale and -kq-scale (motors.xml). Tilts: each rotor force's
+        unit direction (JSBSim does not renormalise it; vehicle_draw gives unit vectors).
+        The reaction torque keeps the body z axis: its roll/pitch part from a 0.6 deg tilt,
+        kQ/kT sin(tilt) = 0.0165 m x 0.0105 = 1.7e-4 N m per N of thrust, is 1/900 of what
+        a thrust change gives about the same axis (0.159 m per N) and is left out."""
+        fdm = self.fdm
+        w_lbs = _CG_MOVED_MASS_KG / SLUG_KG * _LBM_PER_SLUG
+        scale = self.mass_kg / _CG_MOVED_MASS_KG / _IN_M
+        dx, dy, dz = v.cg_offset_frd_m
+        fdm["inertia/pointmass-weight-lbs[0]"] = -w_lbs
+        fdm["inertia/pointmass-weight-lbs[1]"] = w_lbs
+        # Structural frame: x aft, y right, z up (FRD's x and z flipped).
+        fdm["inertia/pointmass-location-X-inches[1]"] = -dx * scale
+        fdm["inertia/pointmass-location-Y-inches[1]"] = dy * scale
+        fdm["inertia/pointmass-location-Z-inches[1]"] = -dz * scale
+        # The feet are fixed to the frame: a CG dz lower sits dz nearer to them.
+        self.rest_agl_m -= dz
+        for i in range(4):
+            fdm[f"fcs/m{i + 1}-kt-scale"] = v.kt_scale[i]
+            fdm[f"fcs/m{i + 1}-kq-scale"] = v.kq_scale[i]
+            for axis, c in zip("xyz", v.thrust_dir_frd[i]):
+                fdm[f"external_reactions/m{i + 1}/{axis}"] = c
 
     def _place(self, lat_deg: float, lon_deg: float, ground_alt_m: float, heading_deg: float,
                initial_agl_m: float, random_seed: int) -> None:

@@ -14,6 +14,9 @@ Per sample:  accel = f_true + b_a + b_a,T + vib_a + n_a,   gyro = w_true + b_g +
 - vib: rotor-synchronous vibration, per motor proportional to (omega/omega_max)^2:
   1/rev imbalance in the rotor plane (x, y; rotating with the spin direction)
   and 2/rev blade-pass ripple on z, at each sample's own rotor phase.
+  With [vibration] enabled (issue 26) these two terms are off: the sensor stage's
+  rotor-phase model, frame, mount and IMU chip (bridge/src/vibration.h, imu_chip.h;
+  docs/explanation/vibrating-world.md) give the vibration, on the scalar path only.
 - n: white noise of the datasheet density, one-sided: sigma = ND * sqrt(rate/2)
   (the noise of a sensor whose bandwidth is the Nyquist band of its output rate).
 Outputs clip at the sensor's full scale.

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from silbridge.bridge import scenario_schema as S
+from silbridge.bridge import vibration_checks
 from silbridge.bridge.errors import ScenarioError
 from silbridge.magfield import field_at
 from silbridge.shm.records import NS_PER_S
@@ -43,6 +44,10 @@ def builtin_names() -> list[str]:
 def draw_rng(seed: int, key: str) -> np.random.Generator:
     """The generator for one named stream of a run: seed plus a CRC of the name."""
     return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(zlib.crc32(key.encode()),)))
+
+
+# The sections the Scenario dataclass names as fields; any other one goes to Scenario.extra.
+_FIXED_SECTIONS = ("physics", "home", "windows", "imu", "baro", "mag", "gnss")
 
 
 class Section:
@@ -80,6 +85,15 @@ class Scenario:
     source: str
     draws: dict = field(default_factory=dict)
     fc_params: list[Section] = field(default_factory=list)   # [[fc_param]]: FC parameter sets
+    # Sections declared in scenario_schema.SECTIONS beyond the fields above (issue 26's
+    # [vehicle], [vibration], ...): read as attributes, sc.vehicle, like the others.
+    extra: dict = field(default_factory=dict)
+
+    def __getattr__(self, name):
+        extra = self.__dict__.get("extra")
+        if extra is not None and name in extra:
+            return extra[name]
+        raise AttributeError(f"Scenario has no section or field {name!r}")
 
     @property
     def imu_hz(self) -> int:
@@ -114,6 +128,7 @@ class Scenario:
             "setpoints": [s.to_dict() for s in self.setpoints],
             "fc_params": [p.to_dict() for p in self.fc_params],
             "source": self.source, "draws": dict(self.draws),
+            **{name: sec.to_dict() for name, sec in self.extra.items()},
         }
 
 
@@ -240,7 +255,8 @@ class _Resolver:
                       baro=sections["baro"], mag=sections["mag"], gnss=sections["gnss"],
                       disturbances=dists, setpoints=sps, source=self.source, draws=self.draws,
                       fc_params=[Section(self.table(f"fc_param[{i}].", e, S.FC_PARAM))
-                                 for i, e in enumerate(self.array("fc_param"))])
+                                 for i, e in enumerate(self.array("fc_param"))],
+                      extra={k: v for k, v in sections.items() if k not in _FIXED_SECTIONS})
         self.check_consistency(sc)
         return sc
 
@@ -402,6 +418,7 @@ class _Resolver:
             if sp.start_s >= sc.duration_s:
                 self.fail(f"setpoint[{i}].start_s", f"{sp.start_s:g} s is not before the end "
                                                      f"of the run ({sc.duration_s:g} s)")
+        vibration_checks.check(sc, self.fail)   # [vibration], [mount], [imu_chip]
         for i, fp in enumerate(sc.fc_params):
             if fp.at_s >= sc.duration_s:
                 self.fail(f"fc_param[{i}].at_s", f"{fp.at_s:g} s is not before the end "

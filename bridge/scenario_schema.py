@@ -24,7 +24,8 @@ Sensor defaults, with sources:
   m/s^2/K (ICM-42688-P), drawn per run uniformly within +-. Bias random walk
   3.8785e-5 rad/s^2/sqrt(Hz) and 6.0e-3 m/s^3/sqrt(Hz): RotorS/PX4 SITL IMU
   defaults. Range +-16 g and +-2000 dps (ICM-42688-P full scale).
-- Vibration: 1/rev imbalance of 2.0 m/s^2 (accel) and 0.01 rad/s (gyro) per
+- Vibration (imu.vib_*, the IMU's own terms while vibration.enabled is false): 1/rev
+  imbalance of 2.0 m/s^2 (accel) and 0.01 rad/s (gyro) per
   motor at full rotor speed, scaling with speed squared; at hover (0.354 of
   full thrust) four motors give ~1 m/s^2 RMS per axis, a well-balanced frame
   with a soft-mounted FC in ArduPilot's vibration guidance (VIBE below
@@ -49,6 +50,74 @@ Sensor defaults, with sources:
   first-order Gauss-Markov with a 60 s correlation time (the PX4 SITL GPS
   model's), velocity 0.05 m/s; 10 Hz; latency 110 ms (PX4 EKF2_GPS_DELAY
   default); 3D fix with 14 satellites.
+- Vehicle imperfections ([vehicle], bridge/vehicle_draw.py; off unless imperfect =
+  true; each drawn uniformly within +- its tolerance, per seed). No batch
+  measurement of these tolerances for this airframe class was found to cite, so
+  each default is derived from the parts and the way they are fitted, and the
+  derivation is the source:
+  - CG: the hand-placed parts of quadx.xml's mass budget, each within a placement
+    tolerance: the battery (0.320 kg) and the payload (0.334 kg) strapped within
+    +-10 mm along the plate, the avionics stack (0.180 kg) within +-5 mm; worst
+    case (0.320 x 10 + 0.334 x 10 + 0.180 x 5) / 1.5 = 5.0 mm along x and y.
+    Vertically, the battery's and payload's foam pads +-3 mm: (0.320 + 0.334) x 3
+    / 1.5 = 1.3 mm.
+  - Thrust and torque coefficients: +-3 %, the issue's "a few %", read as the
+    blade-angle error it takes: static CT of a fixed-pitch propeller goes with the
+    blade angle above zero lift at 75 % radius, for a 10x4.5 prop atan(4.5 /
+    (0.75 pi 10)) = 10.8 deg plus ~3 deg zero-lift angle of a cambered section,
+    so +-0.4 deg of moulding or warp is +-3 %; kT and kQ drawn independently.
+  - Motor tilt: one 0.2 mm printing layer (or a burr or washer of that size on a
+    CNC mount) across the 19 mm bolt spacing of a 2212 motor's 16 x 19 mm mount:
+    atan(0.2 / 19) = 0.6 deg, about body x and about body y.
+  - IMU mounting: a 0.5 mm difference in the compression of the anti-vibration
+    grommets or foam across the 30.5 mm mounting pattern of a flight controller:
+    atan(0.5 / 30.5) = 0.94, taken as 1.0 deg in roll, pitch and yaw. ArduPilot's
+    AHRS_TRIM_X/Y level trim exists to remove this.
+- ESC telemetry ([esc], bridge/esc_telemetry.py; off unless telemetry_hz is set):
+  - kv_rpm_v 920: the 2212 920KV motor jsbsim_models/quadx/motors.xml is built on.
+  - winding_ohm 0.134: derived from that file's own figure, the 0.8 ratio of loaded to
+    no-load speed at full throttle on 3S (11.1 V). At full throttle the model's shaft torque
+    is kQ omega_max^2 = 2.3495e-7 x 855.5^2 = 0.1720 N m, i.e. I = Q / Kt = 16.57 A with
+    Kt = 60 / (2 pi 920) = 0.01038 N m/A; the 20 % speed loss is that current across the
+    winding: R = 0.2 x 11.1 V / 16.57 A = 0.134 ohm. No-load current is neglected.
+  - battery_cells 4, battery_mah 3300, battery_mohm 25, avionics_a 0.6: the pack the FC
+    models today (fc_sil/battery.py; SB_BATT_CELLS, BATT_CAPACITY, SB_BATT_R_MOHM,
+    SB_BATT_I_IDLE defaults), so the ESCs and the FC's power module see the same pack.
+    (motors.xml sizes the top speed on 3S; on 4S the ESC never needs full duty: the winding
+    voltage at full throttle, 11.1 V, stays below the pack's.)
+  - temp_k_per_w 0.1, temp_tau_s 14: an ESC passes its motor's power at ~95 % efficiency
+    (BLHeli_32-class MOSFET stages), so it dissipates 5 % of it; a ~10 g ESC board in the prop
+    wash with ~2 K/W to the air rises 0.05 x 2 = 0.1 K per W passed (hover, 37 W a motor:
+    +3.7 K; full throttle, 180 W: +18 K). Its heat capacity, ~7 J/K (10 g at ~0.7 J/(g K),
+    FR4 and copper), over those 2 K/W gives tau = 14 s. Assumed figures, not a measurement:
+    set them from your own ESC log.
+- Vibration ([vibration], [mount], [imu_chip]; off unless vibration.enabled): a 450 mm
+  quad (quadx.xml: 1.5 kg, hubs 0.225 m from the centre and 0.03 m above the CG) with
+  10x4.5 two-blade props; hover at 0.354 of full thrust is omega = 509 rad/s, 81 Hz
+  (motors.xml).
+  - Imbalance 2.5 g*mm per rotor: a blade 0.05 g heavier than its partner (the
+    smallest difference a magnetic prop balancer check is quoted to catch,
+    jakubsafar.cz "Propeller balance": "even 0.05 g") at the blade's centre of mass,
+    ~0.4 R = 51 mm of a 10-inch prop: 0.05 x 51 = 2.5 g*mm. At hover that is 0.65 N per
+    rotor, 0.43 m/s^2 on 1.5 kg: the light vibration of a balanced quad (ArduPilot's
+    vibration guidance calls VIBE below 15 m/s^2 good and above 30 a problem). A bent
+    prop (V2) is 5 x that.
+  - Blade pass: 2 % of the rotor's thrust at 2/rev. Assumed, no measurement for this
+    airframe found: the order of the arm's share of the circle the blade sweeps at
+    0.75 R (a 20 mm arm at 95 mm: 3.4 %), which unloads the blade once per pass. Further
+    orders 3 and 4 at a quarter of that (0.5 %), so the spectrum shows the 3rd and 4th
+    rotor harmonics that gyro spectra of multirotors show; assumed likewise.
+  - Frame mode: none by default (rigid frame); damping 0.05, within the 2-5 % usual
+    for bolted frame structures (V4 places the mode at the blade-pass frequency).
+  - Mount: hard by default (an FC screwed to the frame). Soft: a resonance well below
+    the 1x frequency at hover isolates (above sqrt 2 x resonance the gain is < 1):
+    30 Hz translational (gain ~0.16 at 81 Hz), 40 Hz rotational (a board on four
+    grommets rocks stiffer than it bounces), damping 0.15 (silicone, loss factor ~0.3
+    = 2 zeta). IMU 0.03 m above the CG: the FC on the top plate, at hub height.
+  - IMU chip: TDK ICM-42688-P (DS-000347 v1.7). ODR 8 kHz, the rate PX4's ICM42688P
+    driver runs the gyro at; AAF 585 Hz, 2nd order: the chip's reset configuration
+    (GYRO_AAF_DELT 13, DELTSQR 170, BITSHIFT 8 in the datasheet's AAF table, 42 to
+    3979 Hz).
 """
 
 from __future__ import annotations
@@ -150,6 +219,77 @@ SECTIONS = {
         "vel_sigma_m_s": F("float", 0.05, min=0, unit="m/s"),
         "fix_type": F("int", 3, min=0, max=6),
         "satellites": F("int", 14, min=0, max=255),
+    },
+    # The vehicle's manufacturing spread (derivations in the module docstring).
+    "vehicle": {
+        "imperfect": F("bool", False, text="draw the imperfections below from the seed; "
+                       "false: the perfect, symmetric quadx"),
+        "cg_tol_xy_m": F("float", 0.005, min=0, unit="m",
+                         text="CG offset along body x and y, +- bound, drawn"),
+        "cg_tol_z_m": F("float", 0.0013, min=0, unit="m", text="CG offset along body z, +-"),
+        "kt_tol": F("float", 0.03, min=0, max=0.5, text="each motor's thrust coefficient, "
+                    "+- fraction (0.03 = +-3 %)"),
+        "kq_tol": F("float", 0.03, min=0, max=0.5, text="each motor's torque coefficient, "
+                    "+- fraction, drawn apart from kT"),
+        "tilt_tol_deg": F("float", 0.6, min=0, max=10, unit="deg",
+                          text="each motor's thrust axis about body x and y, +-"),
+        "imu_tilt_tol_deg": F("float", 1.0, min=0, max=10, unit="deg",
+                              text="IMU mounting roll, pitch and yaw against the body, +-"),
+    },
+    # Vibration from the rotors, the IMU's mount and the IMU chip (issue 26; sources in the
+    # module docstring; bridge/src/vibration.h and imu_chip.h hold the models).
+    "vibration": {
+        "enabled": F("bool", False, text="rotor-phase vibration through frame and mount, read "
+                     "through the chip below; replaces imu.vib_accel/vib_gyro. false: today's IMU"),
+        "imbalance_g_mm": F("float", 2.5, min=0, unit="g*mm",
+                            text="static imbalance of each rotor: force U omega^2 at 1x"),
+        "imbalance_scale": F("vec4", (1.0, 1.0, 1.0, 1.0), min=0,
+                             text="per motor 1..4 multiplier of the imbalance (a bent prop: 5)"),
+        "blades": F("int", 2, min=1, max=8, text="blade pass at blades x rotor frequency"),
+        "blade_pass_ripple": F("float", 0.02, min=0, max=1, unit="fraction of thrust",
+                               text="thrust ripple at blade pass, along the thrust axis"),
+        "harmonic_orders": F("vec4", (3.0, 4.0, 0.0, 0.0), min=0, max=64,
+                             unit="x rotor frequency",
+                             text="further thrust-ripple orders, whole numbers; 0 = unused"),
+        "harmonic_ripple": F("vec4", (0.005, 0.005, 0.0, 0.0), min=0, max=1,
+                             unit="fraction of thrust", text="their amplitudes"),
+        "frame_mode_hz": F("float", 0.0, min=0, unit="Hz",
+                           text="frame structural resonance between rotors and IMU; 0 = rigid"),
+        "frame_mode_damping": F("float", 0.05, above=0, unit="ratio",
+                                text="its damping ratio"),
+    },
+    "mount": {
+        "type": F("str", "hard", choices=("hard", "soft"),
+                  text="hard: the IMU moves with the frame; soft: 2nd order per axis below"),
+        "resonance_hz": F("float", 30.0, above=0, unit="Hz", text="soft mount, translational"),
+        "damping": F("float", 0.15, above=0, unit="ratio", text="soft mount, translational"),
+        "rot_resonance_hz": F("float", 40.0, above=0, unit="Hz", text="soft mount, rotational"),
+        "rot_damping": F("float", 0.15, above=0, unit="ratio", text="soft mount, rotational"),
+        "imu_offset_frd_m": F("vec3", (0.0, 0.0, -0.03), unit="m",
+                              text="IMU from the structural origin (the nominal CG), body FRD"),
+    },
+    "imu_chip": {
+        "odr_hz": F("int", 8000, above=0, unit="Hz", text="chip output data rate: 1000, 2000, "
+                    "4000, 8000, 16000 or 32000, a multiple of imu.rate_hz"),
+        "aaf_hz": F("float", 585.0, above=0, unit="Hz", text="anti-alias filter 3 dB bandwidth"),
+        "aaf_order": F("int", 2, min=0, max=2, text="0: AAF off; 2: on (2nd order)"),
+    },
+    # ESC telemetry (bridge/esc_telemetry.py; derivations in the module docstring). Off unless
+    # telemetry_hz is set: no ESC record exists otherwise.
+    "esc": {
+        "telemetry_hz": F("float", None, above=0, unit="Hz",
+                          text="each ESC's report rate (one record per motor per report); "
+                          "unset: no ESC telemetry"),
+        "kv_rpm_v": F("float", 920.0, above=0, unit="rpm/V", text="motor velocity constant"),
+        "winding_ohm": F("float", 0.134, min=0, unit="ohm", text="motor winding resistance"),
+        "battery_cells": F("int", 4, min=1, max=14, text="series cells of the pack the ESCs see"),
+        "battery_mah": F("float", 3300.0, above=0, unit="mAh", text="pack capacity"),
+        "battery_mohm": F("float", 25.0, min=0, unit="mOhm", text="pack internal resistance"),
+        "avionics_a": F("float", 0.6, min=0, unit="A", text="pack current besides the ESCs"),
+        "temp_k_per_w": F("float", 0.1, min=0, unit="K/W",
+                          text="ESC steady temperature rise per W it passes to its motor"),
+        "temp_tau_s": F("float", 14.0, above=0, unit="s",
+                        text="time constant of the ESC temperature rise"),
     },
 }
 

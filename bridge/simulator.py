@@ -33,7 +33,9 @@ import math
 import numpy as np
 
 from silbridge.bridge import _step
+from silbridge.bridge import esc_telemetry
 from silbridge.bridge import step_buffer as sb
+from silbridge.bridge import vibration_consts
 from silbridge.bridge.disturbances import Disturbances
 from silbridge.bridge.errors import SimulatorError
 from silbridge.bridge.fdm import FT_M, LBF_N, PSF_PA, SLUG_KG, Fdm
@@ -43,6 +45,7 @@ from silbridge.bridge.lowrate import Baro, Gnss, Mag
 from silbridge.bridge.noise import DEFAULT_BLOCK_ROWS
 from silbridge.bridge.scenario import draw_rng
 from silbridge.bridge.setpoints import SetpointProgram
+from silbridge.bridge.vehicle_draw import draw_vehicle
 from silbridge.shm.records import Kind
 from silbridge.shm.records import NS_PER_S as _NS
 
@@ -66,14 +69,17 @@ class Simulator:
         self.events: list[tuple[int, str]] = []
         home = sc.home
         jsb_seed = int(draw_rng(sc.seed, "jsbsim").integers(1, 2**31 - 1))
+        self.vehicle = draw_vehicle(sc)    # [vehicle] imperfections (neutral unless asked)
         self.fdm = Fdm(self.dt_s, home.lat_deg, home.lon_deg, home.alt_m, home.heading_deg,
-                       home.initial_agl_m, jsb_seed, sc.physics.model)
+                       home.initial_agl_m, jsb_seed, sc.physics.model, vehicle=self.vehicle)
         self._estimate_hover()
         self._make_sensors(sc, block_rows)
         self._plan_imu_sampling()
+        self.esc = self._make_esc(sc)      # [esc] telemetry (None unless asked)
         max_imu = -(-self.imu_hz // self.physics_hz) + 1
-        self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4)
-        self._seq = [0] * 9   # records published per kind; the header seq is this mod 2^32
+        esc_slots = esc_telemetry.MOTORS if self.esc else 0
+        self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4 + esc_slots)
+        self._seq = [0] * len(Kind)   # records published per kind; the header seq is this mod 2^32
         self.kernel = self._make_kernel(kernel_cls)
         self._attach_kernel()
         self._views = self.buffer._views
@@ -122,6 +128,9 @@ class Simulator:
         self.setpoints = SetpointProgram(sc, self.dt_ns, math.radians(sc.home.heading_deg))
         # The scenario's current command (what the FC was told), for summaries.
         self.command = {"roll_rad": 0.0, "pitch_rad": 0.0, "alt_m": 0.0}
+        if vibration_consts.enabled(sc) and self.imu_hz != self.physics_hz:
+            raise SimulatorError(f"vibration.enabled reads the IMU chip once per physics step: "
+                                 f"run at imu_hz = {self.physics_hz} (asked {self.imu_hz})")
         self._crash_descent_m_s = sc.physics.crash_descent_m_s
         self._cos_crash_tilt = math.cos(math.radians(sc.physics.crash_tilt_deg))
         self._flip_steps = int(_FLIP_LIMIT_S * self.physics_hz)
@@ -141,14 +150,27 @@ class Simulator:
     def _stage_consts(self) -> dict:
         """The sensor stage's constants by name (bridge/src/sensor_stage.h sb_stage_consts)."""
         fdm, imu = self.fdm, self.imu
-        return {"lbf_to_m_s2": self._lbf_to_m_s2, "ft_m": FT_M, "psf_pa": PSF_PA,
-                "lat0_rad": fdm.home_lat_rad, "lon0_rad": fdm.home_lon_rad,
-                "m_per_rad_lat": fdm.m_per_rad_lat, "m_per_rad_lon": fdm.m_per_rad_lon,
-                "agl0_m": fdm.home_agl_m, "baro_alpha": self.baro.alpha,
-                "cos_crash_tilt": self._cos_crash_tilt,
-                "strike_agl_m": self._strike_check_agl_m, "dt_s": self.dt_s,
-                "inv_omega_max2": imu.inv_omega_max2, "vib_accel": imu.vib_a,
-                "vib_gyro": imu.vib_g, "range_accel": imu.range_a, "range_gyro": imu.range_g}
+        c = {"lbf_to_m_s2": self._lbf_to_m_s2, "ft_m": FT_M, "psf_pa": PSF_PA,
+             "lat0_rad": fdm.home_lat_rad, "lon0_rad": fdm.home_lon_rad,
+             "m_per_rad_lat": fdm.m_per_rad_lat, "m_per_rad_lon": fdm.m_per_rad_lon,
+             "agl0_m": fdm.home_agl_m, "baro_alpha": self.baro.alpha,
+             "cos_crash_tilt": self._cos_crash_tilt,
+             "strike_agl_m": self._strike_check_agl_m, "dt_s": self.dt_s,
+             "inv_omega_max2": imu.inv_omega_max2, "vib_accel": imu.vib_a,
+             "vib_gyro": imu.vib_g, "range_accel": imu.range_a, "range_gyro": imu.range_g}
+        vib = vibration_consts.stage_consts(self.scenario, fdm, self.vehicle)
+        if vib["vib_on"]:   # the rotor-phase model replaces the per-motor 1/rev, 2/rev terms
+            c["vib_accel"] = c["vib_gyro"] = 0.0
+        return {**c, **vib}
+
+    def _make_esc(self, sc):
+        """The ESCs' telemetry when the scenario asks for it ([esc] telemetry_hz), else None."""
+        if not esc_telemetry.enabled(sc):
+            return None
+        pm = self.fdm.fdm.get_property_manager()
+        torque = [pm.get_node(f"fcs/m{i}-torque-lbsft") for i in range(1, 5)]
+        return esc_telemetry.EscTelemetry(sc.esc, self.physics_hz, self._ambient_c,
+                                          self.fdm.h_omega, torque)
 
     def _make_kernel(self, kernel_cls):
         """The per-step kernel: it calls the bound methods of JSBSim's property nodes
@@ -202,7 +224,8 @@ class Simulator:
             imu = s[Kind.IMU]
         return {"imu": imu, "gt_att": att, "gt_nav": nav,
                 "baro": baro, "mag": mag, "gnss": s[Kind.GNSS],
-                "setpoint": s[Kind.SETPOINT]}
+                "setpoint": s[Kind.SETPOINT],
+                **({"esc": s[Kind.ESC]} if self.esc else {})}
 
     # --- the step ---------------------------------------------------------------------
     def step(self, pwm_us) -> np.ndarray:
@@ -225,6 +248,60 @@ class Simulator:
         if flags & 0xFF00:
             count = self._after_step(flags, count)
         return self._views[count]
+
+    # --- many steps (in-process lockstep) --------------------------------------------------
+    @property
+    def batches(self) -> bool:
+        """True when step_batch can run: one IMU sample per step, written by the C kernel."""
+        return self._scalar_imu and hasattr(self.kernel, "run_batch")
+
+    def bind_lockstep(self, **kw) -> None:
+        """Bind the kernel's batch to the bridge's segment and the in-process FC's C poll
+        (bridge/src/step_batch.c bind_lockstep; BridgeLoop.bind_in_process_fc calls it).
+        io: the int64 words the batch reports through (_step.IO_*); errors: the float64
+        error sums (_step.ERR_*), whose home height and command are the simulator's."""
+        self._batch_io = memoryview(kw["io"])
+        self._batch_err = memoryview(kw["errors"])
+        self._batch_err[_step.ERR_HOME_AGL] = self.fdm.home_agl_m
+        self._batch_command()
+        self.kernel.bind_lockstep(**kw)
+
+    def _batch_command(self) -> None:
+        """The scenario's command, which the batch's error samples are taken against."""
+        e, cmd = self._batch_err, self.command
+        e[_step.ERR_CMD_ROLL] = cmd["roll_rad"]
+        e[_step.ERR_CMD_PITCH] = cmd["pitch_rad"]
+        e[_step.ERR_CMD_ALT] = cmd["alt_m"]
+
+    def step_batch(self, n: int) -> int:
+        """Up to n lockstep steps, each published to the FC, polled and its PWM collected in
+        C (bridge/src/step_batch.c); returns the steps done. A step whose kernel flags ask for
+        Python ends the batch: its _after_step runs here, then the kernel finishes it.
+        What Python does before a step (a disturbance switch or ramp) is done here for the
+        first step only: the batch stops before the next switch, and ramps step one by one."""
+        k = self.step_index + 1
+        dist = self.dist
+        if k == dist.next_step:
+            dist.switch(k)
+        elif dist.ramping:
+            dist.update(k)
+        if dist.ramping:
+            n = 1
+        elif dist.next_step > k:
+            n = min(n, dist.next_step - k)
+        kernel = self.kernel
+        done = kernel.run_batch(n)
+        flags = self._batch_io[_step.IO_PENDING]
+        if flags:
+            self.step_index = k + done
+            self.sim_ns = self.step_index * self.dt_ns
+            count = self._after_step(flags, flags & 0xFF)
+            if flags & _step.F_SLOW_DUE:       # a setpoint may have changed the command
+                self._batch_command()
+            done = kernel.finish_step(count)
+        self.step_index = k - 1 + done
+        self.sim_ns = self.step_index * self.dt_ns
+        return done
 
     def _after_step(self, flags: int, count: int) -> int:
         """What the kernel flagged: noise refill, ground contact, crashes, 100 Hz sensors."""
@@ -254,8 +331,8 @@ class Simulator:
         return count
 
     def _slow_sensors(self, count: int) -> int:
-        """GNSS records due at this step, and a changed setpoint (the kernel wrote the
-        baro and mag records)."""
+        """GNSS records due at this step, a changed setpoint and the ESC reports when due
+        (the kernel wrote the baro and mag records)."""
         sim_ns = self.sim_ns
         st = self._state
         buf = self.buffer
@@ -280,6 +357,11 @@ class Simulator:
                 cmd["roll_rad"], cmd["pitch_rad"] = s_roll, s_pitch
             if mask & 2:
                 cmd["alt_m"] = s_alt
+        esc = self.esc
+        if esc is not None and esc.due(sim_ns):
+            n = esc.write(buf.buf, count * 64, self._seq[Kind.ESC], sim_ns)
+            self._seq[Kind.ESC] += n
+            count += n
         self._update_next_slow()
         return count
 
@@ -290,6 +372,8 @@ class Simulator:
             due.append(self.gnss.pending[0][0])
         if self.setpoints.next_step > 0:
             due.append(self.setpoints.next_step * self.dt_ns)
+        if self.esc is not None:
+            due.append(self.esc.schedule.next_ns)
         self.kernel.next_slow_ns = min(due)
 
     def _imu_count(self, k: int) -> int:
@@ -375,6 +459,11 @@ class Simulator:
         st = self._state
         return (float(st[_step.ST_EULER]), float(st[_step.ST_EULER + 1]),
                 float(st[_step.ST_HAGL]) - self.fdm.home_agl_m)
+
+    def rotor_rad_s(self) -> list:
+        """Rotor speeds after the last step, motors 1..4 [rad/s] (JSBSim fcs/mN-omega-rad_s,
+        from the kernel's state: cheap enough for every step; the /rotor log channel)."""
+        return self._state[_step.ST_OMEGA:_step.ST_OMEGA + 4].tolist()
 
     def thrust_n(self) -> tuple:
         """Current rotor thrusts [N], motors 1..4."""

@@ -10,6 +10,8 @@ ground calibration), and arming earlier leaves a bias that tilts the hover.
 
 from __future__ import annotations
 
+import math
+
 from .autodec import AutoDeclination
 from silbridge.shm.records import NS_PER_S as _NS
 
@@ -31,6 +33,11 @@ class AutoFlight:
             self.armed_at_ns = loop.last_sim_ns
             if self.sink is not None:
                 self.sink.event(loop.last_sim_ns, "mode", "armed (auto take-off)")
+
+    def next_due_ns(self) -> float:
+        """When after_batch next acts (fc_loop.py batch_poll): the arming time. The declination
+        waits for a GNSS fix, and GNSS records come in steps Python finishes anyway."""
+        return self.arm_at_ns if self.armed_at_ns is None else math.inf
 
     def _auto_declination(self) -> None:
         fix = self.core.gnss()

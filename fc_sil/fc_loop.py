@@ -14,14 +14,17 @@ the MAVLink HIL links (UDP, TCP), whose records are decoded in Python, `_poll_py
 does the same steps with the same clock readings.
 
 The FC never blocks on input (paper 3.4): when the ring is empty it returns,
-and the process driver waits with spin -> yield -> sleep so two processes on
-two cores do not starve each other. It watches the bridge through the segment
+and the process driver (`run_fc`) waits: in lockstep with the hand-off of
+shm/include/sb_handoff.h (spin while a core is free, else block on the futex),
+in C together with the C polls (shm serve_polls); in real time spin -> yield ->
+sleep, so two processes on two cores do not starve each other. It watches the bridge through the segment
 and leaves with a clear message when the bridge dies.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 import time
 from time import monotonic_ns
 from typing import Callable
@@ -31,6 +34,7 @@ import numpy as np
 from silbridge.fc_sil.fc_transport import FcTransport
 from silbridge.fc_sil.status import STATUS_DTYPE
 from silbridge.shm import lockstep as ls
+from silbridge.shm.segment import serve_polls
 from silbridge.shm.records import (FLAG_STEP_END, PWM_DTYPE, RECORD_DTYPE, RECORD_SIZE, Kind,
                                    word_index)
 from silbridge.shm.timer_slack import set_timer_slack_ns
@@ -86,6 +90,9 @@ class _Series:
 _IO_WORDS = _IO_TIMING + 5
 # With the C poll, the log's batch boundaries are cut every this many polls.
 _FLUSH_POLLS = 128
+
+# python_due's poll count when no log cuts batches.
+_NO_LIMIT = 1 << 30
 
 # Batches up to this size use views made once (a numpy slice costs ~150 ns per poll).
 _SMALL = 64
@@ -151,6 +158,7 @@ class FcLoop:
         self._prev_consume = 0
         self._sink = self._tick = self._flush = self._fc_batch = None
         self._flush_in = 0
+        self._due = []      # batch_poll(): the next_due_ns of the supervisor and schedule
         self._cpoll = self._attach_router(transport.c_capsule())
         self.poll = self._poll_py if self._cpoll is None else self._poll_c
         self.sink = sink
@@ -219,6 +227,45 @@ class FcLoop:
                     self.supervisor.after_batch(self, self.buf[:n], self._pwm_out[:k],
                                                 self._status_out[:k])
         return n
+
+    # -- polls made in C by the bridge's batch (`fly --processes 1` in lockstep) ----------
+    def batch_poll(self):
+        """The C poll for a caller that polls many steps in C without Python in between
+        (BridgeLoop.bind_in_process_fc), or None when this loop's per-poll Python cannot be
+        scheduled: no C poll, a per-cycle sink, or a supervisor or schedule without
+        `next_due_ns()` (the sim time of the next poll whose after_batch acts)."""
+        if self._cpoll is None or self._fc_batch is not None:
+            return None
+        parts = [p for p in (self.supervisor, self.schedule) if p is not None]
+        self._due = [p.next_due_ns for p in parts if hasattr(p, "next_due_ns")]
+        return self._cpoll if len(self._due) == len(parts) else None
+
+    def python_due(self) -> tuple[float, int]:
+        """(sim ns of the first step whose poll Python must follow, C polls allowed before
+        the log's next batch cut): the caller ends its batch at the step that reaches either."""
+        due = math.inf
+        for next_due in self._due:
+            t = next_due()
+            if t < due:
+                due = t
+        return due, (self._flush_in if self._flush is not None else _NO_LIMIT)
+
+    def after_c_polls(self, polls: int, last_n: int) -> None:
+        """A caller made `polls` C polls (batch_poll) since the last call, the newest just now
+        (it consumed last_n records): what _poll_c does after each, for the newest. The
+        earlier ones owed Python nothing (python_due): the supervisor and schedule act only
+        when due, and the log cuts its batches by count."""
+        if polls <= 0:
+            return
+        if self.schedule is not None:
+            self.schedule.after_batch(self)
+        if self._flush is not None:
+            self._flush_in -= polls
+            if self._flush_in <= 0:
+                self._flush_in = _FLUSH_POLLS
+                self._flush()
+        if self.supervisor is not None:
+            self._hand_on(last_n, self._iow[_IO_LAST_K], None)
 
     def _hand_on(self, n: int, k: int, timing: tuple | None) -> None:
         """The per-cycle sink and the supervisor, on the batch just polled (n records in,
@@ -306,6 +353,30 @@ class _NeverStop:
 STOP_GRACE_S = 1.0
 
 
+# The polls Python follows besides FcLoop.python_due's: those that take a record of a kind
+# whose step `fly --processes 1` finishes in Python (the bridge kernel's F_* flags), so the
+# supervisor sees the same polls in both (AutoFlight's declination waits for a GNSS fix).
+_PYTHON_KINDS = (1 << Kind.GNSS) | (1 << Kind.SETPOINT) | (1 << Kind.ESC)
+
+def _served_in_c(loop: FcLoop):
+    """serve(timeout_s) -> (polls, timed_out): in lockstep over shared memory, the FC's
+    waits and C polls in one C loop (shm serve_polls), handing Python only the polls
+    FcLoop.python_due names; None where the loop has no such poll (a HIL link, a per-cycle
+    sink): run_fc then polls from Python. timed_out: no record came within timeout_s."""
+    poll = loop.batch_poll()
+    capsule = loop.seg.c_capsule() if poll is not None else None
+    if capsule is None:
+        return None
+
+    def serve(timeout_s: float) -> tuple[int, bool]:
+        due_ns, polls_left = loop.python_due()
+        polls, last_n, timed_out = serve_polls(capsule, poll, due_ns, polls_left, timeout_s,
+                                               _PYTHON_KINDS)
+        loop.after_c_polls(polls, last_n)
+        return polls, timed_out
+    return serve
+
+
 def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print, stop=_NeverStop,
            notices=None) -> dict:
     """Drive an FcLoop in its own process until the bridge says STOP.
@@ -317,20 +388,29 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print, stop=_NeverSt
     """
     seg = loop.seg
     dt_ns = seg.word(ls.PHYSICS_DT_NS) or 1_000_000
-    if seg.word(ls.RUN_MODE) == ls.MODE_REALTIME:
+    lockstep = seg.word(ls.RUN_MODE) == ls.MODE_LOCKSTEP
+    if not lockstep:
         set_timer_slack_ns(1)   # wake on time when the ring wait sleeps
 
-    # The shm ring yields about two physics periods before it sleeps; HIL links block.
+    # In lockstep the waits are the hand-off (shm/include/sb_handoff.h). In real time the
+    # shm ring yields about two physics periods before it sleeps; HIL links block.
     wait = functools.partial(seg.sensors.wait, yield_s=max(2e-4, 2.0 * dt_ns / _NS))
+    serve = _served_in_c(loop) if lockstep else None
     seg.set_word(ls.FC_STATE, ls.FC_STATE_READY)
     interrupted = None
     stop_deadline = None
     try:
         while True:
-            if loop.poll():
+            if serve is not None:
+                polls, timed_out = serve(wait_slice_s)
+                if polls and not stop.requested:
+                    continue
+            elif loop.poll():
                 seg.beat()
                 if not stop.requested:
                     continue
+            else:
+                timed_out = None
             if stop.requested and stop_deadline is None:
                 interrupted = stop.name
                 stop_deadline = time.monotonic() + STOP_GRACE_S
@@ -354,7 +434,9 @@ def run_fc(loop: FcLoop, *, wait_slice_s: float = 0.02, out=print, stop=_NeverSt
                 notices.poll()
             # Yield (not sleep) through about a physics period: a sleeping FC wakes
             # up to ~1 ms after its data, a yielding one within a microsecond or two.
-            if not wait(wait_slice_s):
+            if serve is not None and not timed_out:
+                continue
+            if timed_out or not wait(wait_slice_s):
                 seg.beat()
                 if seg.word(ls.STOP):
                     continue

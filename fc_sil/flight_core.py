@@ -16,6 +16,7 @@ consistent group of changes (several parameters at once) must serialise them.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
@@ -45,6 +46,20 @@ _STATUS_TEXT = {
 def _check(code: int, what: str) -> None:
     if code != _core.FC_OK:
         raise InputError(f"{what}: {_STATUS_TEXT.get(code, code)}; the previous value is kept")
+
+
+@dataclass(frozen=True)
+class EscReport:
+    """One ESC's latest telemetry as the FC holds it."""
+
+    motor: int                # 0-based motor index
+    sim_ns: int               # time of the report [ns]
+    rpm: float
+    voltage_v: float
+    current_a: float
+    temperature_c: float
+    consumption_mah: float
+    count: int                # reports received from this ESC (wraps at 2^32)
 
 
 class FlightCore:
@@ -252,6 +267,20 @@ class FlightCore:
     def reset(self) -> None:
         """Back to power-on state (disarmed, targets cleared); parameters kept."""
         self._c.reset()
+
+    # ---- what VIBRATION and ESC_TELEMETRY_1_TO_4 report (core_telem.c) ------
+
+    def vibration(self) -> tuple[float, float, float, int]:
+        """ArduPilot's vibration levels x, y, z [m/s^2] of the accel samples consumed so far
+        and the accelerometer's clip count (fc_sil/core/fc_vibe.h)."""
+        x, y, z, clips, _samples = self._c.vibration()
+        return x, y, z, clips
+
+    def esc_reports(self) -> list[EscReport]:
+        """The latest telemetry of each reporting ESC, motor order (fc_sil/core/fc_esc.h);
+        empty while no ESC has reported."""
+        _reports, _rejected, count, rows = self._c.esc_reports()
+        return [EscReport(m, *row) for m, row in enumerate(rows[:count]) if row[0] >= 0]
 
 
     # ---- system identification (SID_* parameters, fc_sysid.h) --------------

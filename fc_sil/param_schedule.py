@@ -10,6 +10,7 @@ run are split into batches: in lockstep the same flight, the same trace.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from silbridge.shm.records import NS_PER_S as _NS
 
@@ -28,6 +29,10 @@ class ParamSchedule:
         self.core = core
         self.pending = sorted(events, key=lambda e: e.at_ns)
         self.applied: list[tuple[int, str, float]] = []   # (sim_ns applied, name, value)
+
+    def next_due_ns(self) -> float:
+        """When after_batch next acts (fc_loop.py batch_poll)."""
+        return self.pending[0].at_ns if self.pending else math.inf
 
     def after_batch(self, loop) -> None:
         now = loop.last_sim_ns

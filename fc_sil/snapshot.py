@@ -19,8 +19,8 @@ import math
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.mavlink.gcs.vehicle_api import (CopterMode, NavControllerOutput, PidTuningRow, SensorBit,
-                                           VehicleSnapshot)
+from silbridge.mavlink.gcs.vehicle_api import (CopterMode, EscRow, NavControllerOutput,
+                                           PidTuningRow, SensorBit, VehicleSnapshot)
 from silbridge.shm.records import Kind
 
 from .prearm import prearm_failure
@@ -166,6 +166,7 @@ def build_snapshot(v) -> VehicleSnapshot:
         pid_rows = _pid_rows(v, st)
     else:
         rates, servo, thr_pct, pid_rows = (0.0, 0.0, 0.0), (), 0, ()
+    vibe = v.core.vibration()      # per IMU sample in C (fc_sil/core/fc_vibe.h)
     wp = v.wp
     nav_bearing = int(math.degrees(wp.bearing_rad)) % 360 if wp.bearing_rad is not None else 0
     press_hpa = _P0_PA * max(0.0, 1.0 - alt_msl_m / 44330.0) ** 5.255 / 100.0
@@ -196,9 +197,15 @@ def build_snapshot(v) -> VehicleSnapshot:
         nav=_nav_output(v, nav_bearing), pid_rows=pid_rows,
         mission_seq=v.mission.current, mission_state=v.mission.state,
         mission_mode=1 if v.mode.number == CopterMode.AUTO else 0,
-        vibration_m_s2=tuple(math.sqrt(max(0.0, x)) for x in v.vibe),
+        vibration_m_s2=vibe[:3], clipping=(int(vibe[3]), 0, 0), esc=_esc_rows(v),
         flight_custom_version=v.custom_version, **gps, **_ekf_fields(v),
         **v.fence.status_fields(v))
+
+
+def _esc_rows(v) -> tuple:
+    """The ESCs' latest telemetry as the core holds it (fc_sil/core/fc_esc.h)."""
+    return tuple(EscRow(r.motor, r.temperature_c, r.voltage_v, r.current_a, r.consumption_mah,
+                        r.rpm, r.count) for r in v.core.esc_reports())
 
 
 def _nav_output(v, bearing_deg: int):

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import collections
 import logging
-import math
 import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
@@ -131,8 +130,6 @@ class Vehicle(NavHelpers, GcsCommands):
         self.yaw_rate_cmd = None
         self.speed_override_m_s = None
         self._landed_since_ns = None
-        self.vibe = [0.0, 0.0, 0.0]
-        self._acc_lp = None
         self.accel_frd = (0.0, 0.0, -9.80665)
         self.guided_att = None
         self.mode: M.Mode = M.Stabilize()
@@ -231,7 +228,6 @@ class Vehicle(NavHelpers, GcsCommands):
         acc = self.core.take_accel_mean()
         if acc is not None:
             self.accel_frd = acc
-            self._vibration(acc, dt_s)
         self.est.predict(self.sim_ns, dt_s, self.q_wxyz, acc)
         if not self.airborne:
             self.est.hold_on_ground()
@@ -254,17 +250,6 @@ class Vehicle(NavHelpers, GcsCommands):
         if self.est.valid and not self.armed and self._gnss_alt_filt is not None:
             # ArduCopter: home follows the vehicle until arming, then stays
             self._set_home()
-
-    def _vibration(self, acc, dt_s: float) -> None:
-        """ArduPilot's VIBE: RMS of the accel about its 5 Hz low-pass, per axis."""
-        if self._acc_lp is None:
-            self._acc_lp = list(acc)
-        k = min(1.0, dt_s * 2.0 * math.pi * 5.0)
-        kv = min(1.0, dt_s * 2.0 * math.pi * 2.0)
-        for i in range(3):
-            self._acc_lp[i] += k * (acc[i] - self._acc_lp[i])
-            d = acc[i] - self._acc_lp[i]
-            self.vibe[i] += kv * (d * d - self.vibe[i])
 
     def _set_home(self, announce: bool = False) -> None:
         """Home follows the vehicle while disarmed; like ArduCopter, a GCS is told (HOME_POSITION

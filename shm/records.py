@@ -38,6 +38,7 @@ class Kind(enum.IntEnum):
     GT_NAV = 6
     PWM = 7
     SETPOINT = 8
+    ESC = 9
 
 
 _HEADER = [
@@ -119,6 +120,18 @@ SETPOINT_DTYPE = _record([
     ("mask", "<u4"),
 ])
 
+# One ESC's telemetry report (one record per motor per epoch; see sb_esc in sb_records.h).
+ESC_DTYPE = _record([
+    ("motor", "u1"),
+    ("motor_count", "u1"),
+    ("reserved0", "<u2"),
+    ("rpm", "<f4"),
+    ("voltage_v", "<f4"),
+    ("current_a", "<f4"),
+    ("temperature_c", "<f4"),
+    ("consumption_mah", "<f4"),
+])
+
 DTYPES: dict[Kind, np.dtype] = {
     Kind.IMU: IMU_DTYPE,
     Kind.BARO: BARO_DTYPE,
@@ -128,6 +141,7 @@ DTYPES: dict[Kind, np.dtype] = {
     Kind.GT_NAV: GT_NAV_DTYPE,
     Kind.PWM: PWM_DTYPE,
     Kind.SETPOINT: SETPOINT_DTYPE,
+    Kind.ESC: ESC_DTYPE,
 }
 
 for _kind, _dt in DTYPES.items():
@@ -163,6 +177,7 @@ KIND_GT_ATT = int(Kind.GT_ATT)
 KIND_GT_NAV = int(Kind.GT_NAV)
 KIND_PWM = int(Kind.PWM)
 KIND_SETPOINT = int(Kind.SETPOINT)
+KIND_ESC = int(Kind.ESC)
 
 FLAGS_OFFSET = RECORD_DTYPE.fields["flags"][1]      # byte offset of the u16 flags in a slot
 HEADER_SIZE = RECORD_DTYPE.fields["payload"][1]     # bytes before the payload of every kind

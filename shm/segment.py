@@ -19,10 +19,14 @@ import time
 from . import _ring
 from .errors import AttachTimeoutError, OwnerDeadError, SegmentMissingError
 
-__all__ = ["Segment", "Ring", "remove_stale", "monotonic_ns"]
+__all__ = ["Segment", "Ring", "remove_stale", "monotonic_ns", "serve_polls"]
 
 Ring = _ring.Ring
 monotonic_ns = _ring.monotonic_ns
+# The FC process's lockstep loop in C (shm/src/serve.c; fc_sil/fc_loop.py run_fc):
+# serve_polls(segment.c_capsule(), poll, until_ns, max_polls, timeout_s, python_kinds)
+#   -> (polls, last_n, timed_out)
+serve_polls = _ring.serve_polls
 
 # Attach polls this often while the segment is missing or being created.
 _ATTACH_POLL_S = 0.002

@@ -168,7 +168,8 @@ def _include_closure(path: Path, dirs: tuple[Path, ...]) -> set[str]:
 PURE_BLOCKS = {
     "sensor stage": (ROOT / "bridge" / "src" / "sensor_stage.c",
                      (ROOT / "bridge" / "src", ROOT / "shm" / "include"),
-                     {"sensor_stage.h", "sb_records.h", "step_maths.h"}),
+                     {"sensor_stage.h", "sb_records.h", "step_maths.h", "vibration.h",
+                      "imu_chip.h"}),
     "control law": (ROOT / "fc_sil" / "core" / "fc_control.c", (ROOT / "fc_sil" / "core",),
                     None),
 }

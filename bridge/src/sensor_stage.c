@@ -31,9 +31,37 @@ const sb_named_double SB_STAGE_CONST_FIELDS[SB_STAGE_CONST_FIELD_COUNT] = {
     CONST(m_per_rad_lat), CONST(m_per_rad_lon), CONST(agl0_m), CONST(baro_alpha),
     CONST(cos_crash_tilt), CONST(strike_agl_m),
     IMU_CONST(dt_s), IMU_CONST(inv_omega_max2), IMU_CONST(vib_accel), IMU_CONST(vib_gyro),
-    IMU_CONST(range_accel), IMU_CONST(range_gyro)};
+    IMU_CONST(range_accel), IMU_CONST(range_gyro),
+    /* issue 26: bridge/vibration_consts.py fills these (all 0 with vibration off and no
+     * IMU misalignment) */
+#define V(name, f) {name, offsetof(sb_stage_consts, vib.f)}
+#define HUB(m, i) V("vib_hub" #m "_x_m", hub_frd_m[i][0]), \
+    V("vib_hub" #m "_y_m", hub_frd_m[i][1]), V("vib_hub" #m "_z_m", hub_frd_m[i][2]), \
+    V("vib_spin" #m, spin_cw[i]), V("vib_imbalance" #m "_kg_m", imbalance_kg_m[i])
+#define RIPPLE(h, i) V("vib_ripple" #h "_order", ripple_order[i]), \
+    V("vib_ripple" #h "_frac", ripple_frac[i])
+    V("vib_on", on), HUB(1, 0), HUB(2, 1), HUB(3, 2), HUB(4, 3), V("vib_kt_n_s2", kt_n_s2),
+    RIPPLE(1, 0), RIPPLE(2, 1), RIPPLE(3, 2), RIPPLE(4, 3), RIPPLE(5, 4),
+    V("vib_mass_kg", mass_kg), V("vib_ixx_kg_m2", inertia_kg_m2[0]),
+    V("vib_iyy_kg_m2", inertia_kg_m2[1]), V("vib_izz_kg_m2", inertia_kg_m2[2]),
+    V("vib_lever_x_m", imu_lever_frd_m[0]), V("vib_lever_y_m", imu_lever_frd_m[1]),
+    V("vib_lever_z_m", imu_lever_frd_m[2]), V("vib_frame_hz", frame_hz),
+    V("vib_frame_damping", frame_damping), V("vib_mount_hz", mount_hz),
+    V("vib_mount_damping", mount_damping), V("vib_mount_rot_hz", mount_rot_hz),
+    V("vib_mount_rot_damping", mount_rot_damping),
+    {"chip_odr_hz", offsetof(sb_stage_consts, chip.odr_hz)},
+    {"chip_aaf_hz", offsetof(sb_stage_consts, chip.aaf_hz)},
+    {"chip_aaf_order", offsetof(sb_stage_consts, chip.aaf_order)},
+#define ROT(ij, k) {"imu_r" #ij, offsetof(sb_stage_consts, imu_rot[k])}
+    {"imu_rot_on", offsetof(sb_stage_consts, imu_rot_on)},
+    ROT(00, 0), ROT(01, 1), ROT(02, 2), ROT(10, 3), ROT(11, 4), ROT(12, 5), ROT(20, 6),
+    ROT(21, 7), ROT(22, 8)};
 #undef CONST
 #undef IMU_CONST
+#undef V
+#undef HUB
+#undef RIPPLE
+#undef ROT
 
 /* Every double of the two structs is named once: a field added without a name fails here. */
 _Static_assert(sizeof(sb_fdm_sample) == SB_FDM_SAMPLE_FIELD_COUNT * sizeof(double),
@@ -63,6 +91,13 @@ void sb_sensor_stage_init(sb_sensor_stage *s, const sb_stage_consts *c, double *
     s->flip_steps = flip_steps;
     s->scalar_imu = scalar_imu;
     s->was_on_ground = on_ground;
+    if (c->vib.on != 0.0) {
+        sb_vib_init(&s->vib, &c->vib, phase_rad);
+        sb_chip_init(&s->chip, &c->chip);
+        const double n = c->chip.odr_hz * c->imu.dt_s;
+        s->chip_n = n >= 1.0 ? (int)lround(n) : 1;
+        sb_chip_ramp_init(&s->chip, s->chip_n);
+    }
 }
 
 int sb_lowrate_start(sb_lowrate *lr, double rate_hz)
@@ -142,6 +177,59 @@ static void to_truth(sb_sensor_stage *s, const sb_fdm_sample *in, truth_t *t)
     t->pos[2] = sb_quant_down_m(c->agl0_m - t->hagl_m);
 }
 
+static void cross(const double a[3], const double b[3], double o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* With vibration on: what the chip puts in its register at the end of the step: the
+ * rigid-body motion at the IMU (accel with the lever-arm terms alpha x r + w x (w x r),
+ * alpha from the step's change of w), interpolated over the step and run through the AAF
+ * at the ODR, plus each vibration line times the AAF's gain at its frequency.
+ * af, w: the IMU's "true" signal; bias, noise and clipping follow in sb_imu_scalar. */
+static void chip_read(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t *t,
+                      double af[3], double w[3])
+{
+    const sb_stage_consts *c = &s->c;
+    const double *r = c->vib.imu_lever_frd_m;
+    double cur[6];
+    const double *prev_w = s->chip_primed ? s->prev6 + 3 : t->w;
+    double al[3], wr[3], wwr[3];
+    for (int i = 0; i < 3; i++)
+        al[i] = (t->w[i] - prev_w[i]) / c->imu.dt_s;
+    cross(t->w, r, wr);
+    cross(t->w, wr, wwr);
+    cross(al, r, cur);
+    for (int i = 0; i < 3; i++) {
+        cur[i] += t->af[i] + wwr[i];
+        cur[i + 3] = t->w[i];
+    }
+    if (!s->chip_primed) {
+        memcpy(s->prev6, cur, sizeof s->prev6);
+        sb_chip_settle(&s->chip, cur);
+        s->chip_primed = 1;
+    }
+    double y[6];   /* the rigid-body motion, chip_n samples through the AAF at the ODR */
+    sb_chip_ramp(&s->chip, s->prev6, cur, y);
+    /* the vibration lines through the AAF, read at the step's end (vibration.h: exact) */
+    sb_vib_step(&s->vib, in->omega_rad_s, c->imu.dt_s, &s->chip, y);
+    memcpy(s->prev6, cur, sizeof s->prev6);
+    memcpy(af, y, 3 * sizeof *af);
+    memcpy(w, y + 3, 3 * sizeof *w);
+}
+
+/* v_imu = R v_body, in place (the IMU's mounting misalignment). */
+static void rotate(const double r[9], double v[3])
+{
+    const double x = r[0] * v[0] + r[1] * v[1] + r[2] * v[2];
+    const double y = r[3] * v[0] + r[4] * v[1] + r[5] * v[2];
+    v[2] = r[6] * v[0] + r[7] * v[1] + r[8] * v[2];
+    v[0] = x;
+    v[1] = y;
+}
+
 /* The one-per-step IMU sample into *r, from the next noise row. */
 static long write_imu(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t *t,
                       sb_record *r, int64_t sim_ns)
@@ -154,8 +242,19 @@ static long write_imu(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t
     if (++s->imu_pos >= s->imu_rows)
         flags |= F_BLOCK_DONE;
     double out[6];
-    sb_imu_scalar(&s->c.imu, t->af, t->w, in->omega_rad_s, s->phase_rad, stoch,
-                  s->injected_rad_s, out);
+    double af[3], w[3];   /* the IMU's true signal: the truth (bytes as before issue 26) */
+    if (s->c.vib.on != 0.0) {   /* or, Python zeroing imu.vib_*, what the chip reads */
+        chip_read(s, in, t, af, w);
+    } else {
+        memcpy(af, t->af, sizeof af);
+        memcpy(w, t->w, sizeof w);
+    }
+    if (s->c.imu_rot_on != 0.0) {
+        rotate(s->c.imu_rot, af);
+        rotate(s->c.imu_rot, w);
+    }
+    sb_imu_scalar(&s->c.imu, af, w, in->omega_rad_s, s->phase_rad, stoch, s->injected_rad_s,
+                  out);
     s->state[ST_TEMP_C] = temp_c;
     header(r, SB_KIND_IMU, s->seq_imu++, sim_ns);
     for (int i = 0; i < 3; i++) {

@@ -18,8 +18,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "imu_chip.h"
 #include "sb_records.h"
 #include "step_maths.h"
+#include "vibration.h"
 
 /* One FDM sample after a physics step, in the units JSBSim reports: the stage converts
  * them (once, here). The field names are the getter names Python binds (fdm.py). */
@@ -50,6 +52,14 @@ typedef struct {
     double cos_crash_tilt;  /* on the ground, a tilt cosine below this is a tip-over */
     double strike_agl_m;    /* below this CG height a rotor strike is checked [m] */
     sb_imu_consts imu;      /* the one-sample-per-step IMU model */
+    /* Issue 26, all unused while vib.on and imu_rot_on are 0 (then the IMU is exactly the
+     * model above): rotor vibration through frame and mount, the chip's ODR and AAF; the
+     * IMU's mounting rotation R_imu_from_body (row-major, the vehicle draw's), applied to
+     * the IMU's true signal when imu_rot_on is 1. */
+    sb_vib_consts vib;
+    sb_chip_consts chip;
+    double imu_rot_on;
+    double imu_rot[9];
 } sb_stage_consts;
 
 /* A struct member a name refers to: the C side of a contract by name. */
@@ -59,7 +69,7 @@ typedef struct {
 } sb_named_double;
 
 #define SB_FDM_SAMPLE_FIELD_COUNT 22
-#define SB_STAGE_CONST_FIELD_COUNT 17
+#define SB_STAGE_CONST_FIELD_COUNT 75
 extern const sb_named_double SB_FDM_SAMPLE_FIELDS[SB_FDM_SAMPLE_FIELD_COUNT];
 extern const sb_named_double SB_STAGE_CONST_FIELDS[SB_STAGE_CONST_FIELD_COUNT];
 
@@ -126,6 +136,13 @@ typedef struct {
     sb_lowrate baro, mag;
     double baro_offset_pa, baro_noise_pa;
     double mag_field_ned_gauss[3], mag_offset_gauss[3], mag_noise_gauss;
+    /* With c.vib.on: the vibration model, the chip, and the rigid-body IMU signal
+     * (accel xyz at the IMU, gyro xyz) of the step before, interpolated between steps. */
+    sb_vibration vib;
+    sb_imu_chip chip;
+    int chip_n;               /* chip samples per physics step (ODR x dt) */
+    int chip_primed;          /* prev6 and the filter hold a step */
+    double prev6[6];
 } sb_sensor_stage;
 
 /* A defined stage: no noise yet, sensors off, counters at 0. */

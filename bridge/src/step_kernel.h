@@ -16,6 +16,7 @@
 
 #include "sb_records.h"
 #include "sensor_stage.h"
+#include "step_lockstep.h"
 
 /* A disturbance force (disturbances.py): f = c * sin(w (t - t_on) + phase), or c. */
 typedef struct {
@@ -30,12 +31,27 @@ typedef struct {
     Py_ssize_t n;
 } force_frame_t;
 
+/* The in-process lockstep batch (step_batch.c): the objects and buffer views behind the
+ * plain-C lockstep state (step_lockstep.h) that Kernel.run_batch steps. */
+typedef struct {
+    sb_lockstep ls;           /* the pointers into the views below, for the plain-C side */
+    PyObject *capsule;        /* the bridge's segment capsule: keeps the segment alive */
+    PyObject *fc_poll;        /* bound Core.poll_io of the in-process FC */
+    PyObject *pwm_obj[4];     /* the held pulse widths as floats, for the setters */
+    int64_t pwm_held[4];      /* their values [us]: rebuilt only when they change */
+    Py_buffer trace;          /* uint8: step records then PWM records, the hash's order */
+    Py_buffer pwm;            /* 64-byte records: where the PWM is popped */
+    Py_buffer io;             /* int64[SB_IO_WORDS] */
+    Py_buffer rotor;          /* float64 (rows, 4): rotor speeds after each step, or none */
+    Py_buffer errors;         /* float64[SB_ERR_COUNT] */
+} sb_batch;
+
 typedef struct {
     PyObject_HEAD
     PyObject *setters[4];     /* bound set_double_value of fcs/m1..4-pwm-us */
     PyObject *run;            /* bound FGFDMExec.run */
-    /* The FDM sample's getters, in SB_FDM_SAMPLE_FIELDS order (bound by name at init):
-     * where issue 25 puts property nodes read from C. */
+    /* The FDM sample's getters, in SB_FDM_SAMPLE_FIELDS order (bound by name at init),
+     * called from C (docs/howto/speed.md: how the step reaches JSBSim, and why so). */
     PyObject *getters[SB_FDM_SAMPLE_FIELD_COUNT];
     Py_buffer buf_view;       /* the step buffer (bytearray of sb_record slots) */
     Py_buffer state_view;     /* float64[ST_COUNT] */
@@ -50,6 +66,7 @@ typedef struct {
     int64_t step_index;
     force_frame_t forces[2];  /* set_forces(): written before each run() */
     int n_force_frames;
+    sb_batch batch;           /* bind_lockstep(): the in-process lockstep batch */
 } Kernel;
 
 /* stepmodule.c */
@@ -61,6 +78,15 @@ int sb_step_get_f64(PyObject *obj, Py_buffer *view, Py_ssize_t min_items, int wr
 /* step_run.c: one physics step, its records written from slot `first`; returns the
  * F_* flags or'ed with the number of records written, or -1 with an exception set. */
 long sb_step_run(Kernel *self, PyObject *pwm, Py_ssize_t first);
+/* The same with the four pulse widths as objects (floats or ints) [us]. */
+long sb_step_run_items(Kernel *self, PyObject *const *pwm, Py_ssize_t first);
+
+/* step_batch.c: Kernel.bind_lockstep / run_batch, and their clean-up */
+PyObject *Kernel_bind_lockstep(Kernel *self, PyObject *args, PyObject *kwds);
+PyObject *Kernel_run_batch(Kernel *self, PyObject *arg);
+PyObject *Kernel_finish_step(Kernel *self, PyObject *arg);
+void sb_batch_clear(sb_batch *b);
+int sb_batch_traverse(sb_batch *b, visitproc visit, void *arg);
 
 /* step_config.c: configuration methods and attributes of the Kernel type */
 void sb_step_clear_forces(Kernel *self);

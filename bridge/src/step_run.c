@@ -10,26 +10,20 @@
 #include "step_kernel.h"
 
 /* The four pulse widths [us] into JSBSim; NaN is refused (a bug upstream, never fly it). */
-static int write_pwm(Kernel *self, PyObject *pwm, int64_t k)
+static int write_pwm(Kernel *self, PyObject *const *pwm, int64_t k)
 {
-    if (PySequence_Fast_GET_SIZE(pwm) != 4) {
-        PyErr_SetString(PyExc_TypeError, "pwm must hold 4 pulse widths [us]");
-        return -1;
-    }
     for (int i = 0; i < 4; i++) {
-        double d = PyFloat_AsDouble(PySequence_Fast_GET_ITEM(pwm, i));
+        double d = PyFloat_AsDouble(pwm[i]);
         if (d == -1.0 && PyErr_Occurred())
             return -1;
         if (d != d) {
-            PyObject *lst = PySequence_List(pwm);
-            PyErr_Format(PyExc_ValueError, "PWM command contains NaN at step %lld: %R",
-                         (long long)k, lst);
-            Py_XDECREF(lst);
+            PyErr_Format(PyExc_ValueError, "PWM command contains NaN at step %lld: [%R, %R, "
+                         "%R, %R]", (long long)k, pwm[0], pwm[1], pwm[2], pwm[3]);
             return -1;
         }
     }
     for (int i = 0; i < 4; i++) {
-        PyObject *r = PyObject_CallOneArg(self->setters[i], PySequence_Fast_GET_ITEM(pwm, i));
+        PyObject *r = PyObject_CallOneArg(self->setters[i], pwm[i]);
         if (r == NULL)
             return -1;
         Py_DECREF(r);
@@ -54,7 +48,7 @@ static int read_sample(Kernel *self, sb_fdm_sample *in)
 }
 
 /* Inputs into JSBSim, run it, and the sample after the step. */
-static int advance_fdm(Kernel *self, PyObject *pwm, sb_fdm_sample *in)
+static int advance_fdm(Kernel *self, PyObject *const *pwm, sb_fdm_sample *in)
 {
     const int64_t k = self->step_index + 1;
     if (write_pwm(self, pwm, k) < 0)
@@ -70,20 +64,14 @@ static int advance_fdm(Kernel *self, PyObject *pwm, sb_fdm_sample *in)
 }
 
 /* Run one step; write the records from slot `first`; return flags. */
-long sb_step_run(Kernel *self, PyObject *pwm, Py_ssize_t first)
+long sb_step_run_items(Kernel *self, PyObject *const *pwm, Py_ssize_t first)
 {
     if (self->stage.state == NULL) {   /* __init__ failed or never ran */
         PyErr_SetString(PyExc_RuntimeError, "Kernel is not initialised");
         return -1;
     }
-    /* A tuple passes through PySequence_Fast untouched; lists work too. */
-    PyObject *seq = PySequence_Fast(pwm, "pwm must be a sequence of 4 pulse widths [us]");
-    if (seq == NULL)
-        return -1;
     sb_fdm_sample in;
-    const int rc = advance_fdm(self, seq, &in);
-    Py_DECREF(seq);
-    if (rc < 0)
+    if (advance_fdm(self, pwm, &in) < 0)
         return -1;
     const long flags = sb_sensor_stage_step(&self->stage, &in, self->step_index * self->dt_ns,
                                             self->slots, (size_t)self->n_slots, (size_t)first);
@@ -91,4 +79,19 @@ long sb_step_run(Kernel *self, PyObject *pwm, Py_ssize_t first)
         PyErr_SetString(flags == SB_STAGE_BUFFER_FULL ? PyExc_ValueError : PyExc_RuntimeError,
                         sb_sensor_stage_error(flags));
     return flags < 0 ? -1 : flags;
+}
+
+long sb_step_run(Kernel *self, PyObject *pwm, Py_ssize_t first)
+{
+    /* A tuple passes through PySequence_Fast untouched; lists work too. */
+    PyObject *seq = PySequence_Fast(pwm, "pwm must be a sequence of 4 pulse widths [us]");
+    if (seq == NULL)
+        return -1;
+    long flags = -1;
+    if (PySequence_Fast_GET_SIZE(seq) != 4)
+        PyErr_SetString(PyExc_TypeError, "pwm must hold 4 pulse widths [us]");
+    else
+        flags = sb_step_run_items(self, PySequence_Fast_ITEMS(seq), first);
+    Py_DECREF(seq);
+    return flags;
 }

@@ -36,7 +36,7 @@ static int Kernel_traverse(Kernel *self, visitproc visit, void *arg)
     Py_VISIT(self->run);
     for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++)
         Py_VISIT(self->getters[i]);
-    return 0;
+    return sb_batch_traverse(&self->batch, visit, arg);
 }
 
 static int Kernel_clear(Kernel *self)
@@ -47,6 +47,7 @@ static int Kernel_clear(Kernel *self)
     for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++)
         Py_CLEAR(self->getters[i]);
     sb_step_clear_forces(self);
+    sb_batch_clear(&self->batch);
     return 0;
 }
 
@@ -280,6 +281,15 @@ static PyMethodDef Kernel_methods[] = {
     {"set_forces", (PyCFunction)Kernel_set_forces, METH_O,
      "set_forces([(setters, [(c_n, w_rad_s, t_on_s, phase_rad, periodic, axis)])]): the "
      "disturbance forces written before each run() (bridge/disturbances.py)"},
+    {"bind_lockstep", (PyCFunction)(void (*)(void))Kernel_bind_lockstep,
+     METH_VARARGS | METH_KEYWORDS,
+     "bind_lockstep(segment, fc_poll, trace, pwm, io, errors, rotor, bridge_word, fc_word): "
+     "what "
+     "run_batch needs (step_batch.c)"},
+    {"run_batch", (PyCFunction)Kernel_run_batch, METH_O,
+     "run_batch(n) -> steps done: up to n lockstep steps of bridge and in-process FC"},
+    {"finish_step", (PyCFunction)Kernel_finish_step, METH_O,
+     "finish_step(count) -> steps done: the step run_batch left to Python, finished"},
     {NULL, NULL, 0, NULL}};
 
 static PyTypeObject KernelType = {
@@ -343,7 +353,20 @@ PyMODINIT_FUNC PyInit__step(void)
         {"ST_W", ST_W}, {"ST_F", ST_F}, {"ST_EULER", ST_EULER}, {"ST_VEL", ST_VEL},
         {"ST_LAT", ST_LAT}, {"ST_LON", ST_LON}, {"ST_HAGL", ST_HAGL}, {"ST_OMEGA", ST_OMEGA},
         {"ST_ON_GROUND", ST_ON_GROUND}, {"ST_BARO_PA", ST_BARO_PA}, {"ST_TEMP_C", ST_TEMP_C},
-        {"ST_PREV_VD", ST_PREV_VD}, {"ST_COS_TILT", ST_COS_TILT}, {"ST_COUNT", ST_COUNT}};
+        {"ST_PREV_VD", ST_PREV_VD}, {"ST_COS_TILT", ST_COS_TILT}, {"ST_COUNT", ST_COUNT},
+        {"IO_PWM_US", SB_IO_PWM_US}, {"IO_ARMED", SB_IO_ARMED},
+        {"IO_PWM_RECEIVED", SB_IO_PWM_RECEIVED}, {"IO_PWM_FIRST_SIM", SB_IO_PWM_FIRST_SIM},
+        {"IO_PWM_FIRST_WALL", SB_IO_PWM_FIRST_WALL}, {"IO_PWM_LAST_SIM", SB_IO_PWM_LAST_SIM},
+        {"IO_PWM_LAST_WALL", SB_IO_PWM_LAST_WALL}, {"IO_TRACE_BYTES", SB_IO_TRACE_BYTES},
+        {"IO_PENDING", SB_IO_PENDING}, {"IO_DONE", SB_IO_DONE},
+        {"IO_FC_MISSED", SB_IO_FC_MISSED}, {"IO_POLLS", SB_IO_POLLS},
+        {"IO_LAST_POLL", SB_IO_LAST_POLL}, {"IO_ERR_EVERY", SB_IO_ERR_EVERY},
+        {"IO_ERR_FROM_NS", SB_IO_ERR_FROM_NS}, {"IO_ERR_N", SB_IO_ERR_N},
+        {"ERR_ATT_SQ", SB_ERR_ATT_SQ}, {"ERR_ALT_SQ", SB_ERR_ALT_SQ},
+        {"ERR_CMD_ROLL", SB_ERR_CMD_ROLL}, {"ERR_CMD_PITCH", SB_ERR_CMD_PITCH},
+        {"ERR_CMD_ALT", SB_ERR_CMD_ALT}, {"ERR_HOME_AGL", SB_ERR_HOME_AGL},
+        {"ERR_COUNT", SB_ERR_COUNT},
+        {"IO_WORDS", SB_IO_WORDS}};
     for (size_t i = 0; i < sizeof ints / sizeof ints[0]; i++)
         if (PyModule_AddIntConstant(m, ints[i].name, ints[i].v) < 0) {
             Py_DECREF(m);

@@ -145,6 +145,8 @@ void fc_core_reset(fc_core_t *c)
     c->next_pwm_ns = 0;
     fc_gnss_store_t g = {0};
     c->gnss = g;
+    fc_vibe_init(&c->vibe, FC_VIBE_CLIP_16G_M_S2);
+    fc_esc_init(&c->esc);
     c->imu_count = 0;
     c->loop_count = 0;
     c->pwm_count = 0;
@@ -169,6 +171,7 @@ fc_status_t fc_core_imu_step(fc_core_t *c, int64_t sim_ns, const float accel_frd
         return FC_ERR_NONFINITE;
     }
     if (!c->have_imu) {
+        fc_vibe_apply(&c->vibe, accel_frd_m_s2, 0.0f);
         (void)fc_ins_update(&c->ins, accel_frd_m_s2, gyro_frd_rad_s);
         (void)fc_mahony_align(&c->ahrs, accel_frd_m_s2);
         c->have_imu = true;
@@ -193,6 +196,7 @@ fc_status_t fc_core_imu_step(fc_core_t *c, int64_t sim_ns, const float accel_frd
                               : c->last_imu_ns;
     c->last_imu_ns = sim_ns;
     c->imu_count++;
+    fc_vibe_apply(&c->vibe, accel_frd_m_s2, dt_s); /* reads the sample only */
 
     if (fc_retune_needed(c->imu_dt_s, dt_s)) {
         c->imu_dt_s = dt_s;
@@ -337,6 +341,12 @@ fc_status_t fc_core_gnss_step(fc_core_t *c, const fc_gnss_store_t *fix)
     c->gnss.valid = true;
     gnss_aid_tilt(c, fix);
     return FC_OK;
+}
+
+fc_status_t fc_core_esc_step(fc_core_t *c, int64_t sim_ns, unsigned motor, unsigned motor_count,
+                             const float values[5])
+{
+    return fc_esc_store(&c->esc, sim_ns, motor, motor_count, values);
 }
 
 /* ---- PWM period ---------------------------------------------------------- */

@@ -42,6 +42,7 @@
 #include "fc_alt_est.h"
 #include "fc_config_map.h"
 #include "fc_control.h"
+#include "fc_esc.h"
 #include "fc_gnss_aid.h"
 #include "fc_inputs.h"
 #include "fc_ins.h"
@@ -52,6 +53,7 @@
 #include "fc_state_source.h"
 #include "fc_status.h"
 #include "fc_vehicle_state.h"
+#include "fc_vibe.h"
 
 /* One snapshot per PWM tick: what logs, PID_TUNING and tests read. The
  * Python STATUS_DTYPE mirrors this layout field for field (checked by a test). */
@@ -116,6 +118,8 @@ typedef struct fc_core {
     fc_gnss_aid_t gnss_aid;   /* IMU history for the GNSS-aided tilt correction */
     uint32_t gnss_aid_count;  /* GNSS fixes that corrected the tilt so far */
     fc_gnss_store_t gnss;
+    fc_vibe_t vibe;           /* accel vibration levels and clipping (VIBRATION), per sample */
+    fc_esc_t esc;             /* latest ESC telemetry per motor (a store, no control effect) */
     fc_state_source_t source; /* estimate + ground truth -> state */
     fc_vehicle_state_t state; /* what the controllers read */
 
@@ -173,6 +177,9 @@ fc_status_t fc_core_gt_att_step(fc_core_t *c, int64_t sim_ns, const float q_wxyz
 fc_status_t fc_core_gt_nav_step(fc_core_t *c, int64_t sim_ns, const float pos_ned_m[3],
                                 const float vel_ned_m_s[3]);
 fc_status_t fc_core_gnss_step(fc_core_t *c, const fc_gnss_store_t *fix);
+/* One ESC's telemetry report (fc_esc.h): stored for telemetry, never used by control. */
+fc_status_t fc_core_esc_step(fc_core_t *c, int64_t sim_ns, unsigned motor, unsigned motor_count,
+                             const float values[5]);
 
 /* System identification (fc_sysid.h): start a SID_* sweep at the next rate-loop
  * step (FC_ERR_ARG when SID_AXIS is 0 or the sweep parameters cannot run), or

@@ -113,6 +113,10 @@ void fc_ext_detach_io(CoreObject *self);
 /* sysidmethods.c: Core methods sysid_start, sysid_stop, sysid_sample. */
 extern PyMethodDef fc_ext_sysid_methods[];
 
+/* core_telem.c: Core methods vibration, esc_reports (what VIBRATION and
+ * ESC_TELEMETRY_1_TO_4 carry to ground stations). */
+extern PyMethodDef fc_ext_telem_methods[];
+
 /* core_layout.c and core_bench.c: module functions. */
 extern PyMethodDef fc_ext_layout_functions[];
 extern PyMethodDef fc_ext_bench_functions[];

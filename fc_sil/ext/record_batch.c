@@ -164,6 +164,12 @@ Py_ssize_t fc_ext_run_records(CoreObject *self, const unsigned char *base, Py_ss
             (void)fc_core_gt_nav_step(c, r.h.sim_ns, pos, r.u.gt_nav.vel_ned_m_s);
             break;
         }
+        case SB_KIND_ESC: {
+            const float v[5] = {r.u.esc.rpm, r.u.esc.voltage_v, r.u.esc.current_a,
+                                r.u.esc.temperature_c, r.u.esc.consumption_mah};
+            (void)fc_core_esc_step(c, r.h.sim_ns, r.u.esc.motor, r.u.esc.motor_count, v);
+            break;
+        }
         case SB_KIND_SETPOINT:
             /* Under MAVLink control the GCS alone commands the vehicle (fc_sil/vehicle.py). */
             if (self->ignore_setpoints) {

@@ -48,7 +48,8 @@ STREAM_GROUPS: dict[int, tuple[int, ...]] = {
     M.MAV_DATA_STREAM_EXTRA2: (M.MAVLINK_MSG_ID_VFR_HUD,),
     M.MAV_DATA_STREAM_EXTRA3: (M.MAVLINK_MSG_ID_SYSTEM_TIME, M.MAVLINK_MSG_ID_BATTERY_STATUS,
                                M.MAVLINK_MSG_ID_VIBRATION, M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
-                               M.MAVLINK_MSG_ID_EKF_STATUS_REPORT),
+                               M.MAVLINK_MSG_ID_EKF_STATUS_REPORT,
+                               M.MAVLINK_MSG_ID_ESC_TELEMETRY_1_TO_4),
 }
 
 # Messages that may be streamed (everything with an encoder except the one-shot ones).

@@ -221,6 +221,31 @@ def vibration(s: VehicleSnapshot, ctx: TelemetryContext):
                                           *(u32(c) for c in s.clipping))]
 
 
+# ESC_TELEMETRY frames by first motor, four ESCs a frame (ArduPilot sends up to 32 this way).
+_ESC_TELEMETRY = {0: mav.MAVLink_esc_telemetry_1_to_4_message,
+                  4: mav.MAVLink_esc_telemetry_5_to_8_message}
+
+
+def esc_telemetry(s: VehicleSnapshot, ctx: TelemetryContext):
+    """ArduPilot's MSG_ESC_TELEMETRY as AP_ESC_Telem fills it: per group of four ESCs with
+    data, temperature degC, voltage cV, current cA, consumption mAh, rpm, reports received,
+    every u16 clamped to 0..65535 (slots of silent ESCs zero); nothing while no ESC reports."""
+    groups: dict[int, list] = {}
+    for r in s.esc:
+        first = r.motor // 4 * 4
+        if first not in _ESC_TELEMETRY:
+            continue
+        f = groups.setdefault(first, [[0] * 4 for _ in range(6)])
+        j = r.motor - first
+        f[0][j] = u8(round(r.temperature_c))
+        f[1][j] = u16(round(r.voltage_v * 100.0))
+        f[2][j] = u16(round(r.current_a * 100.0))
+        f[3][j] = u16(round(r.consumption_mah))
+        f[4][j] = u16(round(r.rpm))
+        f[5][j] = r.count & 0xFFFF
+    return [_ESC_TELEMETRY[first](*f) for first, f in sorted(groups.items())]
+
+
 def extended_sys_state(s: VehicleSnapshot, ctx: TelemetryContext):
     return [mav.MAVLink_extended_sys_state_message(mav.MAV_VTOL_STATE_UNDEFINED,
                                                    u8(s.landed_state))]
@@ -281,6 +306,7 @@ ENCODERS: dict[int, Encoder] = {
     mav.MAVLINK_MSG_ID_BATTERY_STATUS: battery_status,
     mav.MAVLINK_MSG_ID_PID_TUNING: pid_tuning,
     mav.MAVLINK_MSG_ID_VIBRATION: vibration,
+    mav.MAVLINK_MSG_ID_ESC_TELEMETRY_1_TO_4: esc_telemetry,
     mav.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: extended_sys_state,
     mav.MAVLINK_MSG_ID_HOME_POSITION: home_position,
     mav.MAVLINK_MSG_ID_EKF_STATUS_REPORT: ekf_status_report,

@@ -105,6 +105,18 @@ class NavControllerOutput:
 
 
 @dataclass(frozen=True, slots=True)
+class EscRow:
+    """One ESC's latest telemetry, as ESC_TELEMETRY_1_TO_4 reports it (units in the names)."""
+    motor: int                      # 0-based motor index
+    temperature_c: float
+    voltage_v: float
+    current_a: float
+    consumption_mah: float
+    rpm: float
+    count: int                      # telemetry reports received from this ESC
+
+
+@dataclass(frozen=True, slots=True)
 class VehicleSnapshot:
     """Everything the telemetry streams read, as of one instant of the vehicle loop."""
     time_boot_ms: int = 0
@@ -193,6 +205,8 @@ class VehicleSnapshot:
     # vibration
     vibration_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)
     clipping: tuple[int, int, int] = (0, 0, 0)
+    # ESC telemetry (ESC_TELEMETRY_1_TO_4 / _5_TO_8): reporting ESCs only, motor order
+    esc: tuple[EscRow, ...] = ()
     # identity
     flight_sw_version: int = flight_sw_version(*COPTER_VERSION)
     flight_custom_version: str = "00000000"   # 8 ASCII chars, e.g. the git hash

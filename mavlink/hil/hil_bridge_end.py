@@ -228,6 +228,10 @@ class HilBridgeEnd:
             self.pump(0.0)
         return self.words[i]
 
+    def c_capsule(self) -> None:
+        """No segment for C code: records cross in Python (the bridge steps per step)."""
+        return None
+
     def wait_word(self, i: int, at_least: int, timeout_s: float, **_spin) -> bool:
         deadline = time.monotonic() + timeout_s
         while True:

@@ -9,9 +9,21 @@ Per physics step the bridge sends, in this order:
   HIL_SENSOR x n    one per IMU sample, time_usec = the sample's time; the step's BARO / MAG
                     ride on the last one (fields_updated bits 9 and 12 / 6-8; a step with no
                     IMU sample sends one HIL_SENSOR with only those bits), `id` = 0
+  ESC_TELEMETRY_1_TO_4 (and _5_TO_8)                    when it has ESC records (see below)
   HIL_STATE_QUATERNION  ground truth (GT_ATT + GT_NAV); closes the step (STEP_END)
 The decoder rebuilds the step in the contract's order (IMU..., GT_ATT, GT_NAV, BARO, MAG, GNSS,
-SETPOINT), numbers each kind from 0 as the bridge does, and flags the last record STEP_END.
+SETPOINT, ESC...), numbers each kind from 0 as the bridge does, and flags the last record
+STEP_END.
+
+ESC telemetry rides in ArduPilot's ESC_TELEMETRY_1_TO_4 (#11030, motors 1-4; _5_TO_8 for 5-8):
+the record is quantised at the source to what a BLHeli_32 ESC reports (bridge/esc_telemetry.py:
+whole degC, 0.01 V, 0.01 A, whole mAh, whole rpm) and this message carries exactly those five
+quantities in exactly those units, four ESCs a frame, so the FC rebuilds each record bit for
+bit. The common dialect's ESC_STATUS (#291) carries rpm, voltage and current only; temperature
+would need ESC_INFO (#290) beside it and consumption has no field in either. The records' time
+is the step's (ESC reports are made at physics-step times), so the message needs no timestamp.
+`count` carries each ESC's report number (1-based, never 0): a slot with count 0 is an ESC
+that did not report.
 
 Exact where promised (the bridge quantises at the source, see hil_quant.py): IMU accel, gyro
 and sample times; BARO pressure; MAG field; GNSS lat, lon, alt, velocity, eph, epv, fix type,
@@ -43,6 +55,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.shm.records import (
     BARO_DTYPE,
+    ESC_DTYPE,
     FLAG_STEP_END,
     FLAGS_OFFSET,
     GNSS_DTYPE,
@@ -50,6 +63,7 @@ from silbridge.shm.records import (
     GT_NAV_DTYPE,
     IMU_DTYPE,
     KIND_BARO,
+    KIND_ESC,
     KIND_GNSS,
     KIND_GT_ATT,
     KIND_GT_NAV,
@@ -104,6 +118,21 @@ _ID_HIL_STATE_QUATERNION = mav.MAVLINK_MSG_ID_HIL_STATE_QUATERNION
 _ID_HIL_GPS = mav.MAVLINK_MSG_ID_HIL_GPS
 _ID_SET_ATTITUDE_TARGET = mav.MAVLINK_MSG_ID_SET_ATTITUDE_TARGET
 _ID_SET_POSITION_TARGET_LOCAL_NED = mav.MAVLINK_MSG_ID_SET_POSITION_TARGET_LOCAL_NED
+# ESC telemetry frames by first motor index (4 ESCs a frame).
+_ESC_MSGS = {0: mav.MAVLink_esc_telemetry_1_to_4_message,
+             4: mav.MAVLink_esc_telemetry_5_to_8_message}
+_ID_ESC_FIRST = {cls.id: first for first, cls in _ESC_MSGS.items()}
+_S_ESC = record_struct(Kind.ESC)
+# Every message id SensorDecoder.feed consumes (the FC end routes these to it).
+DECODED_IDS = frozenset({_ID_HIL_SENSOR, _ID_HIL_STATE_QUATERNION, _ID_HIL_GPS,
+                         _ID_SET_ATTITUDE_TARGET, _ID_SET_POSITION_TARGET_LOCAL_NED,
+                         *_ID_ESC_FIRST})
+_U16 = 65535
+
+
+def _u16(x: float) -> int:
+    """x rounded into a u16 field (ArduPilot constrains to 0..UINT16_MAX the same way)."""
+    return min(_U16, max(0, round(x)))
 
 
 def f32(x: float) -> float:
@@ -142,6 +171,7 @@ class SensorEncoder:
         self.sensor_frames = V2Frames(codec, mav.MAVLink_hil_sensor_message)
         self._gps = V2Frames(codec, mav.MAVLink_hil_gps_message)
         self._state = V2Frames(codec, mav.MAVLink_hil_state_quaternion_message)
+        self._esc_reports = [0] * 8     # ESC reports sent per motor (ESC_TELEMETRY count)
 
     def encode(self, recs: np.ndarray, wall_ns: int, out: list) -> None:
         """Append the frames of `recs` (whole steps, any number) to the list out."""
@@ -193,10 +223,36 @@ class SensorEncoder:
             out.append(self._sensor_frame(step_us, (0.0,) * 3, (0.0,) * 3, 0.0, 0, baro, mag,
                                           lo, hi))
             n += 1
+        esc_idx = np.flatnonzero(kinds == KIND_ESC)
+        if len(esc_idx):
+            frames = self.esc_frames(recs[esc_idx].view(ESC_DTYPE))
+            out.extend(frames)
+            n += len(frames)
         if att is not None or nav is not None:
             out.append(self._state_frame(att, nav, step_us))
             n += 1
         self.messages += n
+
+    def esc_frames(self, esc) -> list:
+        """ESC_TELEMETRY_1_TO_4 / _5_TO_8 frames of one step's ESC records (the message's
+        units: degC, cV, cA, mAh, rpm; each u16 clamped as ArduPilot sends it)."""
+        cols = [esc[k].tolist() for k in ("temperature_c", "voltage_v", "current_a",
+                                          "consumption_mah", "rpm")]
+        frames: dict[int, list] = {}
+        for i, m in enumerate(esc["motor"].tolist()):
+            first = m // 4 * 4
+            if first not in _ESC_MSGS:
+                continue
+            f = frames.setdefault(first, [[0] * 4 for _ in range(6)])
+            j = m - first
+            f[0][j] = min(255, max(0, round(cols[0][i])))
+            f[1][j] = _u16(cols[1][i] * 100.0)
+            f[2][j] = _u16(cols[2][i] * 100.0)
+            f[3][j] = _u16(cols[3][i])
+            f[4][j] = _u16(cols[4][i])
+            f[5][j] = self._esc_reports[m] % _U16 + 1     # never 0: 0 marks a silent slot
+            self._esc_reports[m] += 1
+        return [_ESC_MSGS[first](*f).pack(self.codec) for first, f in sorted(frames.items())]
 
     def _sensor_frame(self, t_us, a, g, temp_c, bits, baro, mag, lo, hi) -> bytes:
         m = (0.0, 0.0, 0.0)
@@ -289,6 +345,7 @@ class SensorDecoder:
         self._gnss = None
         self._att_sp = None
         self._pos_sp = None
+        self._esc: list = []        # ESC_TELEMETRY_* messages of the step being rebuilt
         self._temp_c = 0.0
         self._wall = 0
 
@@ -310,6 +367,8 @@ class SensorDecoder:
             self._att_sp = msg
         elif mid == _ID_SET_POSITION_TARGET_LOCAL_NED:
             self._pos_sp = msg
+        elif mid in _ID_ESC_FIRST:
+            self._esc.append(msg)
         return b""
 
     def _reject(self, why: str):
@@ -388,6 +447,9 @@ class SensorDecoder:
             self._gnss = None
         if self._att_sp is not None or self._pos_sp is not None:
             out.append(self._setpoint_record(step_ns, wall))
+        if self._esc:
+            out.extend(self._esc_records(step_ns, wall))
+            self._esc = []
         if not out:
             return b""
         if end:
@@ -415,6 +477,25 @@ class SensorDecoder:
         return _S_GNSS.pack(KIND_GNSS, 0, self._next(KIND_GNSS), step_ns, wall, g.lat, g.lon, g.alt,
                             g.vn / 100.0, g.ve / 100.0, g.vd / 100.0, g.eph, g.epv, g.fix_type,
                             g.satellites_visible)
+
+    def _esc_records(self, step_ns: int, wall: int) -> list:
+        """The ESC records of the step's ESC_TELEMETRY_* messages, motors in order (a slot
+        with count 0 did not report)."""
+        slots = []
+        for m in self._esc:
+            first = _ID_ESC_FIRST[m.get_msgId()]
+            for j in range(4):
+                if m.count[j]:
+                    slots.append((first + j, m))
+        slots.sort(key=lambda s: s[0])
+        out = []
+        for motor, m in slots:
+            j = motor % 4
+            out.append(_S_ESC.pack(KIND_ESC, 0, self._next(KIND_ESC), step_ns, wall, motor,
+                                   len(slots), 0, float(m.rpm[j]), m.voltage[j] / 100.0,
+                                   m.current[j] / 100.0, float(m.temperature[j]),
+                                   float(m.totalcurrent[j])))
+        return out
 
     def _setpoint_record(self, step_ns: int, wall: int) -> bytes:
         a, p = self._att_sp, self._pos_sp

@@ -30,7 +30,7 @@ from silbridge.shm import lockstep as ls
 from silbridge.shm.records import RECORD_DTYPE, RECORD_SIZE
 
 from silbridge.mavlink.hil.hil_channel import connect, make_codec, pid
-from silbridge.mavlink.hil.hil_codec import SensorDecoder
+from silbridge.mavlink.hil.hil_codec import DECODED_IDS, SensorDecoder
 from silbridge.mavlink.hil.hil_errors import HilInputError, HilPeerLost
 from silbridge.mavlink.hil.hil_pwm import PwmEncoder
 
@@ -188,7 +188,7 @@ class HilFcEnd:
 
     def _on_message(self, m, now_ns: int) -> None:
         mid = m.get_msgId()
-        if mid in (107, 113, 115, 82, 84):
+        if mid in DECODED_IDS:
             if not self.config_ready and mid == 107:
                 self._foreign_simulator()
             data = self.decoder.feed(m, now_ns)

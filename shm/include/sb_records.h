@@ -36,7 +36,8 @@ enum sb_kind {
     SB_KIND_GT_NAV = 6,   /* bridge -> FC, ground truth: navigation part */
     SB_KIND_PWM = 7,      /* FC -> bridge */
     SB_KIND_SETPOINT = 8, /* bridge -> FC, scripted scenario setpoint */
-    SB_KIND_COUNT = 9
+    SB_KIND_ESC = 9,      /* bridge -> FC, one ESC's telemetry report (off unless asked) */
+    SB_KIND_COUNT = 10
 };
 
 /* Header flags. */
@@ -114,6 +115,21 @@ typedef struct sb_setpoint {
     uint8_t reserved[20];
 } sb_setpoint;
 
+/* One ESC's telemetry report, as BLHeli_32 serial telemetry / bidirectional DShot give it
+ * per ESC: one record per motor per report epoch, all of an epoch at the same sim_ns.
+ * Values are quantised at the source to what the ESC reports (bridge/esc_telemetry.py). */
+typedef struct sb_esc {
+    uint8_t motor;           /* 0-based motor index (ArduCopter quad X order) */
+    uint8_t motor_count;     /* ESCs reporting */
+    uint16_t reserved0;
+    float rpm;               /* mechanical rotor speed [rev/min], whole rpm */
+    float voltage_v;         /* pack voltage at the ESC [V], 0.01 V steps */
+    float current_a;         /* battery-side ESC current [A], 0.01 A steps */
+    float temperature_c;     /* ESC temperature [degC], whole degrees */
+    float consumption_mah;   /* charge this ESC drew since start [mAh], whole mAh */
+    uint8_t reserved[16];
+} sb_esc;                    /* 40 bytes */
+
 typedef struct sb_record {
     sb_header h;
     union {
@@ -125,6 +141,7 @@ typedef struct sb_record {
         sb_gt_nav gt_nav;
         sb_pwm pwm;
         sb_setpoint setpoint;
+        sb_esc esc;
         uint8_t raw[40];
     } u;
 } sb_record;
@@ -143,6 +160,7 @@ SB_STATIC_ASSERT(sizeof(sb_gt_att) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_gt_nav) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_pwm) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_setpoint) == 40, "payload must be 40 bytes");
+SB_STATIC_ASSERT(sizeof(sb_esc) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_record) == SB_RECORD_SIZE, "a record is one 64-byte slot");
 
 #endif /* SB_RECORDS_H */

@@ -3,7 +3,7 @@
  * lives in shared memory and is used from two processes.
  *
  * Ownership rule (who writes what):
- *   producer: the slots, ctl->head, ctl->rejected
+ *   producer: the slots, ctl->head, ctl->rejected, ctl->step_word
  *   consumer: ctl->tail, ctl->overwritten
  *   segment owner, once, before the segment is published: the config line
  * Each side keeps its own index and a cached copy of the other's in its
@@ -60,7 +60,11 @@ typedef struct sb_ring_ctl {
     /* Line 1: written by the producer only. */
     _Alignas(SB_CACHE_LINE) _Atomic uint64_t head; /* records published, free-running */
     _Atomic uint64_t rejected;                     /* pushes refused (full, overwrite = 0) */
-    uint8_t pad1[SB_CACHE_LINE - 16];
+    /* The producer's lockstep word (sb_segment.h sb_seg_word: the sensor ring's is
+     * BRIDGE_SIM_NS, the actuator ring's FC_SIM_NS), on the head's line: a lockstep
+     * hand-off (records, then the word) moves this one line and the records' slots. */
+    _Atomic uint64_t step_word;
+    uint8_t pad1[SB_CACHE_LINE - 24];
     /* Line 2: written by the consumer only. */
     _Alignas(SB_CACHE_LINE) _Atomic uint64_t tail; /* records popped or skipped */
     _Atomic uint64_t overwritten;                  /* records skipped because they were lapped */
@@ -72,6 +76,9 @@ _Static_assert(sizeof(_Atomic uint64_t) == 8, "atomic counters must be plain 8-b
 _Static_assert(sizeof(sb_ring_ctl) == 3 * SB_CACHE_LINE, "ring control is three cache lines");
 _Static_assert(offsetof(sb_ring_ctl, head) == 1 * SB_CACHE_LINE, "head on its own line");
 _Static_assert(offsetof(sb_ring_ctl, tail) == 2 * SB_CACHE_LINE, "tail on its own line");
+_Static_assert(offsetof(sb_ring_ctl, step_word) / SB_CACHE_LINE ==
+                   offsetof(sb_ring_ctl, head) / SB_CACHE_LINE,
+               "the producer's lockstep word shares the head's line");
 
 /* Process-local view of one ring. Producer fields and consumer fields are
  * used by the side that plays that role; both are loaded from shared memory

@@ -29,7 +29,7 @@
 #include "sb_ring.h"
 
 #define SB_SEG_MAGIC 0x314D485342494C53ull /* "SLIBSHM1" read little-endian */
-#define SB_SEG_VERSION 2u /* 2: doorbells and the owner tag */
+#define SB_SEG_VERSION 3u /* 2: doorbells and the owner tag; 3: step words on the ring lines, hand-off */
 #define SB_SEG_WORDS 8u
 #define SB_SEG_HEADER_BYTES 4096u
 #define SB_SEG_NAME_MAX 64u
@@ -38,6 +38,16 @@
 #define SB_SEG_TAG_ENV "SILBRIDGE_OWNER_TAG"
 
 enum sb_seg_ring { SB_RING_SENSORS = 0, SB_RING_ACTUATORS = 1, SB_RING_COUNT = 2 };
+
+/* The lockstep words the C side reads (shm/lockstep.py names all eight; tests/shm/
+ * test_handoff.py checks these agree): each side's step word, the run mode, STOP. */
+enum sb_seg_word_index {
+    SB_WORD_OWNER_STEP = 0, /* BRIDGE_SIM_NS: on the sensor ring's producer line */
+    SB_WORD_PEER_STEP = 1,  /* FC_SIM_NS: on the actuator ring's producer line */
+    SB_WORD_RUN_MODE = 2,
+    SB_WORD_STOP = 3
+};
+enum { SB_MODE_LOCKSTEP = 1 }; /* RUN_MODE value: the hand-off waits of sb_handoff.h apply */
 
 enum sb_seg_status {
     SB_SEG_OK = 0,
@@ -84,8 +94,10 @@ typedef struct sb_seg_header {
     _Atomic uint64_t peer_attaches; /* how many times a peer attached */
     _Atomic int32_t peer_pid;       /* 0 until a peer attaches */
     _Atomic uint32_t peer_closed;   /* 1 after the peer closed its mapping */
-    uint32_t pad2[10];
-    /* Lines 3..10: lockstep words, one per line so their writers never share. */
+    _Atomic uint64_t peer_trouble;  /* the peer's hand-off spins that ran out or lost their core */
+    uint32_t pad2[8];
+    /* Lines 3..10: lockstep words, one per line so their writers never share; use
+     * sb_seg_word(): words[0] and words[1] are unused, those two live on the rings' lines. */
     struct {
         _Alignas(SB_CACHE_LINE) _Atomic uint64_t value;
     } words[SB_SEG_WORDS];
@@ -96,6 +108,10 @@ typedef struct sb_seg_header {
     /* Line 19: who made it: $SILBRIDGE_OWNER_TAG of the owner at creation (a test session,
      * a CI job), so `silbridge clean` and leak checks can tell whose a leftover is. */
     _Alignas(SB_CACHE_LINE) char owner_tag[SB_SEG_TAG_MAX];
+    /* Line 20: the lockstep hand-off's way of waiting (sb_handoff.h), written by the owner
+     * when its choice changes, read by the peer before each wait. */
+    _Alignas(SB_CACHE_LINE) _Atomic uint32_t handoff_arm;
+    uint32_t pad3[15];
 } sb_seg_header;
 
 _Static_assert(sizeof(sb_seg_header) <= SB_SEG_HEADER_BYTES, "header fits its page");
@@ -105,6 +121,8 @@ _Static_assert(offsetof(sb_seg_header, words) == 3 * SB_CACHE_LINE, "words start
 _Static_assert(sizeof(((sb_seg_header *)0)->words[0]) == SB_CACHE_LINE, "one word per line");
 _Static_assert(sizeof(_Atomic int32_t) == 4, "atomic pid is a plain int32");
 _Static_assert(offsetof(sb_seg_header, bells) % SB_CACHE_LINE == 0, "bells on their own lines");
+_Static_assert(offsetof(sb_seg_header, owner_tag) == 19 * SB_CACHE_LINE, "the tag stays on line 19");
+_Static_assert(offsetof(sb_seg_header, handoff_arm) % SB_CACHE_LINE == 0, "hand-off on its line");
 
 /* Process-local handle of a mapped segment. */
 typedef struct sb_segment {
@@ -149,6 +167,15 @@ typedef struct sb_seg_probe {
     char tag[SB_SEG_TAG_MAX]; /* owner tag (version >= 2), "" if none */
 } sb_seg_probe;
 int sb_segment_probe(const char *name, sb_seg_probe *out, sb_seg_diag *diag);
+
+/* Lockstep word i (0..SB_SEG_WORDS-1): the two step words sit beside the heads of the rings
+ * their writers produce, so a hand-off moves one line besides the records (sb_ring.h). */
+static inline _Atomic uint64_t *sb_seg_word(sb_seg_header *h, unsigned i)
+{
+    if (i == SB_WORD_OWNER_STEP) return &h->rings[SB_RING_SENSORS].step_word;
+    if (i == SB_WORD_PEER_STEP) return &h->rings[SB_RING_ACTUATORS].step_word;
+    return &h->words[i].value;
+}
 
 /* The doorbell this side rings after publishing / waits on for the other side. */
 static inline sb_doorbell *sb_segment_my_bell(const sb_segment *seg)

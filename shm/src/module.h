@@ -26,6 +26,7 @@
 
 #include "sb_capi.h"
 #include "sb_doorbell.h"
+#include "sb_handoff.h"
 #include "sb_ring.h"
 #include "sb_segment.h"
 #include "sb_wait.h"
@@ -34,6 +35,7 @@ typedef struct SegmentObject {
     PyObject_HEAD
     sb_segment seg;           /* seg.base == NULL: never opened or closed */
     sb_ring rings[SB_RING_COUNT]; /* the process-local ring state lives here, once */
+    sb_handoff handoff;       /* this process's lockstep hand-off waits (sb_handoff.h) */
     PyObject *name;           /* instance name (str) */
     PyObject *dict;           /* so the Python subclass can keep attributes */
 } SegmentObject;
@@ -81,6 +83,25 @@ static inline int sb_check_open(const SegmentObject *seg)
  * (the other side's doorbell) or, with bell NULL, yield and sleep. */
 int sb_wait_gil(sb_ready_fn ready, const void *ctx, double timeout_s, double spin_s,
                 double yield_s, sb_doorbell *bell);
+
+/* In lockstep (the RUN_MODE word), wait for the other side's step with the GIL released:
+ * the owner for the peer's step word >= at_least (counted as a step of its choice), the
+ * peer for a record in the sensor ring (at_least unused). 1 / 0 as sb_handoff_wait. */
+int sb_handoff_wait_gil(SegmentObject *self, uint64_t at_least, double timeout_s);
+extern int sb_doorbells_off; /* SILBRIDGE_NO_DOORBELL at import: the old yield/sleep waits */
+static inline int sb_in_lockstep(const SegmentObject *self)
+{
+    return !sb_doorbells_off &&
+           atomic_load_explicit(sb_seg_word(self->seg.hdr, SB_WORD_RUN_MODE),
+                                memory_order_relaxed) == SB_MODE_LOCKSTEP;
+}
+
+void sb_handoff_start(SegmentObject *self);                  /* at create / attach */
+void sb_handoff_fill_capi(SegmentObject *self, sb_capi *api); /* the capsule's wait_step */
+PyObject *sb_handoff_stats_dict(SegmentObject *self);         /* Segment.handoff_stats() */
+
+/* serve_polls (serve.c): the FC process's lockstep loop of waits and C polls. */
+PyObject *sb_serve_polls(PyObject *module, PyObject *const *args, Py_ssize_t nargs);
 
 /* Parse the keyword arguments of a METH_FASTCALL | METH_KEYWORDS call:
  * names[i] is filled into out[i] (borrowed) when given. */

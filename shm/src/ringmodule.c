@@ -60,7 +60,7 @@ static int64_t seconds_to_ns(double s, int64_t fallback)
 
 /* SILBRIDGE_NO_DOORBELL=1 at import: waits yield and sleep as before the doorbells (for
  * A/B measurements, tools/load_bench.py --ab); publishers still ring (nobody waits). */
-static int sb_doorbells_off = 0;
+int sb_doorbells_off = 0;
 
 int sb_wait_gil(sb_ready_fn ready, const void *ctx, double timeout_s, double spin_s,
                 double yield_s, sb_doorbell *bell)
@@ -153,9 +153,23 @@ static PyObject *mod_layout(PyObject *Py_UNUSED(m), PyObject *Py_UNUSED(a))
         "seg_version", (Py_ssize_t)SB_SEG_VERSION);
 }
 
+/* The lockstep words and values the C side uses by number (shm/lockstep.py names them). */
+static PyObject *mod_lockstep_layout(PyObject *Py_UNUSED(m), PyObject *Py_UNUSED(a))
+{
+    return Py_BuildValue(
+        "{snsnsnsnsnsnsn}", "owner_step_word", (Py_ssize_t)SB_WORD_OWNER_STEP,
+        "peer_step_word", (Py_ssize_t)SB_WORD_PEER_STEP, "run_mode_word",
+        (Py_ssize_t)SB_WORD_RUN_MODE, "stop_word", (Py_ssize_t)SB_WORD_STOP, "mode_lockstep",
+        (Py_ssize_t)SB_MODE_LOCKSTEP, "ring_step_word", (Py_ssize_t)offsetof(sb_ring_ctl, step_word),
+        "seg_handoff_arm", (Py_ssize_t)offsetof(sb_seg_header, handoff_arm));
+}
+
 static PyMethodDef module_methods[] = {
     {"layout_hash", mod_layout_hash, METH_NOARGS, "layout_hash() -> int (this build)"},
     {"layout", mod_layout, METH_NOARGS, "layout() -> dict of sizeof/offsetof of shared structs"},
+    {"lockstep_layout", mod_lockstep_layout, METH_NOARGS,
+     "lockstep_layout() -> dict: the lockstep word indices and values the C side uses, and "
+     "where the step words and the hand-off's way of waiting live"},
     {"monotonic_ns", mod_monotonic_ns, METH_NOARGS, "CLOCK_MONOTONIC [ns], the wall_ns clock"},
     {"segment_bytes", mod_segment_bytes, METH_VARARGS,
      "segment_bytes(sensor_slots, actuator_slots) -> int"},
@@ -164,6 +178,12 @@ static PyMethodDef module_methods[] = {
      "owner_alive, tag, created_unix_ns, version, published, bytes); None if missing"},
     {"remove_stale", mod_remove_stale, METH_O,
      "remove_stale(name) -> bool: remove the segment if its owner is gone"},
+    {"serve_polls", (PyCFunction)(void (*)(void))sb_serve_polls, METH_FASTCALL,
+     "serve_polls(capsule, poll, until_ns, max_polls, timeout_s, python_kinds) -> (polls, "
+     "last_n, timed_out): the FC's lockstep loop (shm/src/serve.c): wait for the bridge's "
+     "records (the hand-off), call poll(), until the FC's step word reaches until_ns (int, or "
+     "float inf), a poll took a record whose kind is in the bitmask python_kinds, max_polls "
+     "polls that consumed records, STOP, or timeout_s; timed_out: the last wait saw no record."},
     {"c_stream_bench", (PyCFunction)(void (*)(void))sb_bench_stream,
      METH_VARARGS | METH_KEYWORDS,
      "c_stream_bench(ring, seconds, batch=64, idle_timeout_s=10.0, max_records=0) -> dict: C "

@@ -274,6 +274,8 @@ static PyObject *Ring_wait(RingObject *self, PyObject *const *args, Py_ssize_t n
     double spin_s = kw[0] ? PyFloat_AsDouble(kw[0]) : -1.0;
     double yield_s = kw[1] ? PyFloat_AsDouble(kw[1]) : -1.0;
     if (PyErr_Occurred()) return NULL;
+    if (self->index == SB_RING_SENSORS && sb_in_lockstep(self->owner))
+        return PyBool_FromLong(sb_handoff_wait_gil(self->owner, 0, timeout_s));
     int ok = sb_wait_gil(ring_ready, &ctx, timeout_s, spin_s, yield_s,
                          sb_segment_their_bell(&self->owner->seg));
     if (ok < 0) return NULL;
@@ -347,7 +349,8 @@ static PyMethodDef Ring_methods[] = {
      "poll() -> bool. True when a record is waiting; never blocks."},
     {"wait", (PyCFunction)(void (*)(void))Ring_wait, METH_FASTCALL | METH_KEYWORDS,
      "wait(timeout_s, *, spin_s=20e-6, yield_s=200e-6) -> bool. Wait for a record: spin, "
-     "then sched_yield, then sleep (GIL released while yielding and sleeping)."},
+     "then sched_yield, then sleep (GIL released while yielding and sleeping). In lockstep "
+     "the FC's wait for sensor records is the hand-off (sb_handoff.h; spin_s, yield_s unused)."},
     {"stats", (PyCFunction)Ring_stats, METH_NOARGS,
      "stats() -> dict(written, read, overwritten, rejected, available)."},
     {NULL, NULL, 0, NULL},

@@ -78,6 +78,7 @@ static PyObject *Seg_create(SegmentObject *self, PyObject *args)
     Py_INCREF(name);
     Py_SETREF(self->name, name);
     bind_rings(self);
+    sb_handoff_start(self);
     Py_RETURN_NONE;
 }
 
@@ -97,6 +98,7 @@ static PyObject *Seg_attach(SegmentObject *self, PyObject *name)
     Py_INCREF(name);
     Py_SETREF(self->name, name);
     bind_rings(self);
+    sb_handoff_start(self);
     Py_RETURN_NONE;
 }
 
@@ -122,6 +124,7 @@ static PyObject *Seg_c_capsule(SegmentObject *self, PyObject *Py_UNUSED(ignored)
     api->is_owner = self->seg.is_owner;
     api->seg = &self->seg;
     api->rings = self->rings;
+    sb_handoff_fill_capi(self, api);
     PyObject *cap = PyCapsule_New(api, SB_CAPI_CAPSULE, capi_free);
     if (!cap) {
         PyMem_Free(api);
@@ -194,7 +197,7 @@ static PyObject *Seg_set_word(SegmentObject *self, PyObject *const *args, Py_ssi
     unsigned long long v = PyLong_AsUnsignedLongLong(args[1]);
     if (v == (unsigned long long)-1 && PyErr_Occurred()) return NULL;
     if (sb_check_open(self)) return NULL;
-    atomic_store_explicit(&self->seg.hdr->words[i].value, v, memory_order_release);
+    atomic_store_explicit(sb_seg_word(self->seg.hdr, (unsigned)i), v, memory_order_release);
     sb_bell_ring(sb_segment_my_bell(&self->seg));
     Py_RETURN_NONE;
 }
@@ -205,7 +208,7 @@ static PyObject *Seg_word(SegmentObject *self, PyObject *arg)
     if (word_index(arg, &i) < 0) return NULL;
     if (sb_check_open(self)) return NULL;
     return PyLong_FromUnsignedLongLong(
-        atomic_load_explicit(&self->seg.hdr->words[i].value, memory_order_acquire));
+        atomic_load_explicit(sb_seg_word(self->seg.hdr, (unsigned)i), memory_order_acquire));
 }
 
 typedef struct word_ready_ctx {
@@ -238,12 +241,19 @@ static PyObject *Seg_wait_word(SegmentObject *self, PyObject *const *args, Py_ss
     double yield_s = kw[1] ? PyFloat_AsDouble(kw[1]) : -1.0;
     if (PyErr_Occurred()) return NULL;
     if (sb_check_open(self)) return NULL;
-    word_ready_ctx ctx = {&self->seg.hdr->words[i].value, at_least};
+    word_ready_ctx ctx = {sb_seg_word(self->seg.hdr, (unsigned)i), at_least};
+    if (self->seg.is_owner && i == SB_WORD_PEER_STEP && sb_in_lockstep(self))
+        return PyBool_FromLong(sb_handoff_wait_gil(self, at_least, timeout_s));
     if (word_ready(&ctx)) Py_RETURN_TRUE;
     int ok = sb_wait_gil(word_ready, &ctx, timeout_s, spin_s, yield_s,
                          sb_segment_their_bell(&self->seg));
     if (ok < 0) return NULL;
     return PyBool_FromLong(ok);
+}
+
+static PyObject *Seg_handoff_stats(SegmentObject *self, PyObject *Py_UNUSED(ignored))
+{
+    return sb_handoff_stats_dict(self);
 }
 
 static PyObject *Seg_get_sensors(SegmentObject *self, void *Py_UNUSED(c))
@@ -331,7 +341,13 @@ static PyMethodDef Seg_methods[] = {
     {"word", (PyCFunction)Seg_word, METH_O, "word(i) -> int: load lockstep word i with acquire."},
     {"wait_word", (PyCFunction)(void (*)(void))Seg_wait_word, METH_FASTCALL | METH_KEYWORDS,
      "wait_word(i, at_least, timeout_s, *, spin_s=20e-6, yield_s=200e-6) -> bool: wait until "
-     "word i >= at_least (spin, yield, sleep; GIL released while yielding and sleeping)."},
+     "word i >= at_least (spin, yield, sleep; GIL released while yielding and sleeping). In "
+     "lockstep the owner's wait for FC_SIM_NS is the hand-off (sb_handoff.h; spin_s and "
+     "yield_s unused)."},
+    {"handoff_stats", (PyCFunction)Seg_handoff_stats, METH_NOARGS,
+     "handoff_stats() -> dict: this process's lockstep hand-off waits (waits, ready, spun, "
+     "ran_out, preempted, blocked, timeouts), the way of waiting in use (arm) and, in the "
+     "owner, its choice (windows, probes, switches, cost_ns per arm; shm/include/sb_handoff.h)."},
     {NULL, NULL, 0, NULL},
 };
 

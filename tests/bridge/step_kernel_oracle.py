@@ -166,6 +166,12 @@ class Kernel:
         self.getters = _by_name(getters, K.SAMPLE_FIELDS, "getters")
         self.st = state
         self.c = {n: float(v) for n, v in _by_name(consts, K.CONST_FIELDS, "consts").items()}
+        if self.c["vib_on"] or self.c["imu_rot_on"]:
+            # The oracle mirrors the stage with issue 26's vibration and IMU rotation off (the byte-for-byte
+            # contract of S1..S4); the vibration and chip have their own tests
+            # (test_vibration.py against JSBSim, test_vibration_chip.py against scipy).
+            raise NotImplementedError("the oracle has no vibration model nor IMU rotation: "
+                                      "vib_on and imu_rot_on must be 0")
         self._phase = [float(x) for x in phase]
         self.dt_ns = int(dt_ns)
         self.flip_steps = int(flip_steps)

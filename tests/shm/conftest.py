@@ -14,6 +14,11 @@ import pytest
 
 from silbridge.shm.errors import shm_path
 
+# The cffi bindings of the hand-off's choice (handoff_cffi.py), imported by name
+# (--import-mode=importlib), as tests/fc_sil does with its block bindings.
+if str(Path(__file__).resolve().parent) not in sys.path:
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+
 PEER = Path(__file__).with_name("peer_proc.py")
 _counter = itertools.count()
 

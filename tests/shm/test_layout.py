@@ -36,6 +36,7 @@ INCLUDE = Path(__file__).resolve().parents[2] / "shm" / "include"
 UNION_MEMBER = {
     Kind.IMU: "imu", Kind.BARO: "baro", Kind.MAG: "mag", Kind.GNSS: "gnss",
     Kind.GT_ATT: "gt_att", Kind.GT_NAV: "gt_nav", Kind.PWM: "pwm", Kind.SETPOINT: "setpoint",
+    Kind.ESC: "esc",
 }
 HEADER_FIELDS = ("kind", "flags", "seq", "sim_ns", "wall_ns")
 

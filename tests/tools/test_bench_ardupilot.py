@@ -176,6 +176,10 @@ def test_bridge_side_log_forwards_the_profile_and_logs_timing(tmp_path):
     st = log.channels["/fc/status"]
     assert st["sim_ns"][0] == 0 and len(st) == 2500 and (np.diff(st["sim_ns"]) == 1e6).all()
     assert len(log.channels["/pwm"]) == 2500 and log.channels["/imu"]["sim_ns"][0] >= 0
+    # The motor model's rotor speeds, one row per physics step on the log clock (/rotor).
+    rot = log.channels["/rotor"]
+    np.testing.assert_array_equal(rot["sim_ns"], st["sim_ns"] + 1_000_000)
+    assert rot["omega_rad_s"].shape == (2500, 4) and (rot["omega_rad_s"][-1] > 300).all()
     # The command as forwarded, on the log clock: what the "cmd" scoring reads.
     sp = log.channels["/setpoint"]
     assert sp["sim_ns"][0] == 0 and sp["roll_rad"].max() == pytest.approx(amp_rad, rel=1e-6)

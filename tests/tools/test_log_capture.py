@@ -17,6 +17,7 @@ class _PlainSink:
         self.pwm_records = inner.pwm_records
         self.event = inner.event
         self.close = inner.close
+        self.rotor = inner.rotor
 
 
 def _fly(tmp_path, monkeypatch, plain: bool):

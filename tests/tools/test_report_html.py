@@ -140,3 +140,29 @@ def test_controllers_side_by_side_when_several_ran():
     rms = next(r for r in rows[2:] if r[0].full_text().startswith("RMS"))
     assert [c.full_text() for c in rms[1:]] == ["0.500 ± 0.100", "0.500 ± 0.100", "1.227",
                                                 "0.500 ± 0.100", "n/a", "2.04"]
+
+
+def test_vibration_section_has_spectrum_and_spectrogram_with_rotor_harmonics(report):
+    """Per scenario with a kept log: a spectrum (analysis window) and a spectrogram (whole
+    run) of gyro and accel, the rotor harmonics marked from the log's /rotor channel."""
+    from silbridge.tools.logs.log_reader import read_log
+
+    index, root, results = report
+    h2 = [h for h in root.all("h2") if h.attrs.get("id") == "vibration"]
+    assert len(h2) == 1
+    caps = [c.full_text() for c in root.all("figcaption")]
+    for r in results:
+        if r.spec.run_index != 0:
+            continue
+        sc = r.spec.scenario
+        spec = [c for c in caps if c.startswith(f"{sc}, ") and "amplitude spectrum" in c]
+        gram = [c for c in caps if c.startswith(f"{sc}, ") and "spectrogram" in c]
+        assert len(spec) == 1 and len(gram) == 1, caps
+        rotor = read_log(r.spec.log_path).channels["/rotor"]
+        assert len(rotor)
+        assert "rotor harmonics 1x, 2x (blade pass), 3x at rotor" in spec[0]
+        assert "1x, 2x (blade pass) and 3x the rotor frequency over time" in gram[0]
+    for fig in root.all("figure"):
+        img = next(fig.all("img")).attrs["src"]
+        assert (index.parent / img).is_file()
+    assert any("spectrogram" in next(f.all("img")).attrs["src"] for f in root.all("figure"))

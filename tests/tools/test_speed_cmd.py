@@ -17,7 +17,7 @@ import pytest
 from silbridge.tools.cli.cmd_speed import print_report
 
 SB = [sys.executable, "-m", "silbridge"]
-CASES = ["jsbsim", "fly1", "fly2", "fly1_log", "fly2_log"]
+CASES = ["jsbsim", "fly1", "fly2", "fly1_log", "fly2_log", "campaign1", "campaign2"]
 
 
 def _env_without_arducopter() -> dict:
@@ -32,7 +32,8 @@ def result() -> dict:
     env = _env_without_arducopter()
     if shutil.which("arducopter", path=env["PATH"]):
         pytest.skip("an arducopter binary is in /usr/bin here: its skip cannot be shown")
-    done = subprocess.run(SB + ["speed", "--runs", "1", "--duration", "1", "--json"],
+    done = subprocess.run(SB + ["speed", "--runs", "1", "--duration", "1", "--campaign", "1",
+                                "--json"],
                           capture_output=True, text=True, timeout=300, env=env)
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout)
@@ -58,7 +59,7 @@ def test_ratios_and_per_step_times_follow_from_the_runs(result):
         assert c["of_jsbsim"] == pytest.approx(x / bare), name
         assert c["wall_us_per_step"]["median"] * x * hz == pytest.approx(1e6), name
         r = c["runs"][0]
-        if name == "jsbsim":
+        if name == "jsbsim" or name.startswith("campaign"):
             assert c["loop_cpu_s"] is None and c["cpu_us_per_step"] is None
         else:
             # The flight's own --json figures, passed through and divided by its steps.
@@ -71,7 +72,8 @@ def test_ratios_and_per_step_times_follow_from_the_runs(result):
 def test_the_issues_targets_sit_beside_the_measured_ratios(result):
     got = {(t["case"], t["figure"]): t for t in result["targets"]}
     assert set(got) == {("fly1", "of_jsbsim"), ("fly2", "of_jsbsim"),
-                        ("fly2", "worst_below_median")}
+                        ("fly2", "worst_below_median"), ("campaign2", "of_single_run")}
+    assert got["campaign2", "of_single_run"]["target"] == 1.6
     assert got["fly1", "of_jsbsim"]["target"] == 0.8
     assert got["fly2", "of_jsbsim"]["target"] == 0.7
     assert got["fly2", "worst_below_median"]["target"] == 0.2
@@ -96,3 +98,22 @@ def test_a_bad_run_count_is_a_one_line_error():
                           timeout=60)
     assert done.returncode == 2 and "--runs must be at least 1" in done.stderr
     assert "Traceback" not in done.stderr and done.stdout == ""
+
+
+def test_the_campaign_flies_every_scenario_and_compares_with_its_single_runs(result):
+    """--campaign 1: one run of each of S1..S4 on 1 and on 2 jobs; the overall factor is all
+    simulated seconds over the wall time, its ratio is over the 1-job runs' own median."""
+    assert result["campaign"] == 1
+    single = result["cases"]["campaign1"]["runs"][0]["run_realtime_factor"]
+    assert single > 0
+    for name in ("campaign1", "campaign2"):
+        c = result["cases"][name]
+        r = c["runs"][0]
+        assert r["sim_s"] == pytest.approx(4.0) and r["realtime_factor"] > 0
+        assert r["run_realtime_factor"] > 0
+        assert c["single_run_x"] == single
+        assert c["of_single_run"] == pytest.approx(r["realtime_factor"] / single)
+    lines: list[str] = []
+    print_report(result, out=lines.append)
+    assert any("x a single run" in line and line.startswith("campaign, 4 runs, --jobs 2")
+               for line in lines)

@@ -20,6 +20,7 @@ import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, replace
 from multiprocessing import get_context
 from pathlib import Path
@@ -222,6 +223,32 @@ def _worker_init() -> None:
     install_worker()
 
 
+# Each pool worker flies one run at a time on one core: numpy's OpenBLAS (and any OpenMP)
+# thread pool in every worker can only compete with the other workers' lockstep loops (perf
+# once showed `blas_thread_server` spinning in a campaign). The BLAS calls in a run (the
+# metrics) are small; the log is written by the loop and does not depend on them.
+_ONE_THREAD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+@contextmanager
+def _worker_env():
+    """The thread limits in the environment the spawned workers inherit (they are read when
+    numpy loads, before any initializer could act); a limit the user set is kept."""
+    added = {k: v for k, v in _ONE_THREAD_ENV.items() if k not in os.environ}
+    os.environ.update(added)
+    try:
+        yield
+    finally:
+        for k in added:
+            os.environ.pop(k, None)
+
+
+def _cost(spec: RunSpec) -> float:
+    """A run's expected wall time, for the order of submission only: foreign autopilots
+    fly several times slower than our FC per simulated second."""
+    return spec.duration_s * (1.0 if spec.fc == "ours" else 4.0)
+
+
 def _run_local(specs, jobs: int, progress: bool, label: str) -> list[RunResult]:
     from silbridge.tools.loop.stop_signals import PARENT_STOP_SIGNAL, STOP
 
@@ -240,9 +267,13 @@ def _run_local(specs, jobs: int, progress: bool, label: str) -> list[RunResult]:
         return out
     results: dict[int, RunResult] = {}
     # spawn: every worker starts clean (no inherited JSBSim or shared-memory state).
-    with STOP.polling(), ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn"),
-                                             initializer=_worker_init) as pool:
-        futures = {pool.submit(run_one, s): i for i, s in enumerate(specs)}
+    # Longest first (sorted is stable: equal runs keep their order), so the campaign does not
+    # end with one long run on one core while the others idle; results stay in spec order.
+    order = sorted(range(len(specs)), key=lambda i: -_cost(specs[i]))
+    with STOP.polling(), _worker_env(), \
+            ProcessPoolExecutor(max_workers=min(jobs, len(specs)),
+                                mp_context=get_context("spawn"), initializer=_worker_init) as pool:
+        futures = {pool.submit(run_one, specs[i]): i for i in order}
         pending = set(futures)
         forwarded = False
         while pending:

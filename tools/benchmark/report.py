@@ -16,6 +16,7 @@ import numpy as np
 
 from silbridge.tools.benchmark.att_scoring import command_at, target_at
 from silbridge.tools.benchmark.report_html import render_index
+from silbridge.tools.benchmark.report_spectrum import spectrum_plots
 from silbridge.tools.benchmark.table1 import ROWS, scenario_key
 from silbridge.tools.logs.viz_frames import euler_from_quat
 
@@ -130,7 +131,7 @@ def write_report(results, table_md: str, table_json: dict, out_dir: Path, *,
 
     rep = out_dir / "report"
     rep.mkdir(parents=True, exist_ok=True)
-    figures = []
+    figures, spectra = [], []
     seen = set()
     first_meta = None
     described = {}
@@ -147,11 +148,13 @@ def write_report(results, table_md: str, table_json: dict, out_dir: Path, *,
         label = name if fc == "ours" else f"{name} {fc}"
         figures += trace_plots(log, label, rep, r.spec.windows,
                                who=f"run {r.spec.run_index} (seed {r.spec.seed})")
+        spectra += spectrum_plots(_plt(), log, label, rep, r.spec.windows[2],
+                                  who=f"run {r.spec.run_index} (seed {r.spec.seed})")
     figures += box_plots(results, rep)
     (rep / "table1.md").write_text(table_md + "\n")
     (rep / "table1.json").write_text(json.dumps(table_json, indent=2) + "\n")
     index = rep / "index.html"
     index.write_text(render_index(table=table_json, results=results, figures=figures,
                                   rep_dir=rep, log_meta=first_meta, scenarios=described,
-                                  extra_sections=extra_sections))
+                                  extra_sections=extra_sections, spectra=spectra))
     return index

@@ -152,11 +152,25 @@ def runs_html(results, rep_dir: Path) -> str:
     return f'<table class="runs"><thead>{head}</thead><tbody>{"".join(rows)}</tbody></table>'
 
 
+# What the vibration section shows (tools/benchmark/report_spectrum.py makes its figures).
+_VIBRATION_NOTE = (
+    "<p class='sub'>Spectra of the IMU as the FC read it (and of the chip's raw samples when "
+    "the log has them), first run of each scenario: Welch's average over the analysis window "
+    "and a spectrogram of the whole run. Dashed: the rotor harmonics 1x (imbalance), 2x "
+    "(blade pass of a two-blade prop) and 3x, from the logged rotor speed. "
+    "<code>silbridge analyze LOG --spectrum</code> lists the peaks.</p>")
+
+
+def _figures(figures) -> list[str]:
+    return [f"<figure><img src='{_e(img)}' alt='{_e(caption)}'>"
+            f"<figcaption>{_e(caption)}</figcaption></figure>" for img, caption in figures]
+
+
 def render_index(*, table: dict, results, figures: list[tuple[str, str]], rep_dir: Path,
                  log_meta: dict | None = None, scenarios: dict | None = None,
-                 extra_sections=()) -> str:
-    """The whole page. figures: (image file in rep_dir, caption); scenarios: name ->
-    description of the scenarios flown."""
+                 extra_sections=(), spectra=()) -> str:
+    """The whole page. figures, spectra: (image file in rep_dir, caption); scenarios:
+    name -> description of the scenarios flown."""
     n = max((st.get("n", 0) for sc in table["scenarios"].values() for st in sc.values()
              if isinstance(st, dict)), default=0)
     when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
@@ -179,12 +193,12 @@ def render_index(*, table: dict, results, figures: list[tuple[str, str]], rep_di
                                "</td></tr>" for k, v in scenarios.items())
                      + "</tbody></table>")
     parts.append("<h2 id='plots'>Plots</h2><div class='figs'>")
-    for img, caption in figures:
-        parts.append(f"<figure><img src='{_e(img)}' alt='{_e(caption)}'>"
-                     f"<figcaption>{_e(caption)}</figcaption></figure>")
-    parts.append("</div>")
+    parts += [*_figures(figures), "</div>"]
     if not figures:
         parts.append("<p>No plots (no logs kept and no finite metrics).</p>")
+    if spectra:
+        parts += ["<h2 id='vibration'>Vibration</h2>", _VIBRATION_NOTE, "<div class='figs'>",
+                  *_figures(spectra), "</div>"]
     for title, body in extra_sections:
         parts.append(f"<h2>{_e(title)}</h2><pre>{_e(body)}</pre>")
     parts += ["<h2 id='config'>Configuration</h2>", config_html(table, results, log_meta),

@@ -7,6 +7,7 @@ such a log anyway and lists its problems. An unfinished log (a killed run: no
 closing summary) or an interrupted run's log is not refused: it is checked and
 measured over what it holds, and the report says what is missing at the end
 (per channel, where its data ends). Windows are in seconds of sim time.
+`--spectrum` prints the IMU's vibration peaks instead (tools/cli/analyze_spectrum.py).
 """
 
 from __future__ import annotations
@@ -14,11 +15,13 @@ from __future__ import annotations
 import argparse
 import json
 
+from silbridge.tools.cli import analyze_spectrum
 from silbridge.tools.logs.integrity import inspect_log
 from silbridge.tools.logs.mcap_log import read_log
 from silbridge.tools.benchmark.metrics import Windows, compute_metrics, json_safe
 
-HELP = "check a run log's integrity and compute the paper's metrics from it"
+HELP = "check a run log's integrity and compute the paper's metrics (or, with --spectrum, " \
+       "its IMU spectra) from it"
 
 # (key, label, format) of the text table, in the order of the paper's Table 1.
 _ROWS = [
@@ -65,6 +68,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(default %(default)g)")
     p.add_argument("--force", action="store_true",
                    help="compute metrics even for a log that fails the integrity check")
+    analyze_spectrum.add_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,6 +86,8 @@ def run(args: argparse.Namespace) -> int:
             if len(report.problems) > 1 else ""
         raise AnalyzeError(f"{args.log} fails the integrity check: {report.problems[0]}{more}; "
                            "fix the run, or pass --force to analyse it anyway")
+    if args.spectrum:
+        return analyze_spectrum.run(args, log, windows.analysis, report)
     metrics = compute_metrics(log, windows)
     if args.json:
         print(json.dumps({"log": args.log, "ok": report.ok, "problems": report.problems,

@@ -25,6 +25,10 @@ def add_arguments(p) -> None:
     p.add_argument("--arducopter", default=None, metavar="PATH",
                    help="ArduCopter SITL binary for its own-physics case (default "
                         "$SILBRIDGE_ARDUCOPTER, then `arducopter` on PATH; none: skipped)")
+    p.add_argument("--campaign", type=int, nargs="?", const=2, default=None, metavar="N",
+                   help="also run the bench's campaign, N runs of each of S1..S4 (no value: 2) "
+                        "of --duration, on 1 and on 2 jobs: its overall speed over a single "
+                        "run's")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -39,12 +43,15 @@ def run(args) -> int:
 
     if args.runs < 1:
         raise SpeedOptionError("--runs must be at least 1")
+    if args.campaign is not None and args.campaign < 1:
+        raise SpeedOptionError("--campaign must be at least 1 run of each scenario")
     if not args.duration > 0:
         raise SpeedOptionError("--duration must be > 0 simulated seconds")
     binary = find_arducopter(args.arducopter)
     skipped = {} if binary else {"arducopter": NO_ARDUCOPTER}
     res = measure(args.duration, args.runs, imu_hz=args.imu_hz, arducopter=binary,
-                  skipped=skipped, progress=lambda s: print(s, file=sys.stderr))
+                  campaign=args.campaign, skipped=skipped,
+                  progress=lambda s: print(s, file=sys.stderr))
     if args.json:
         print(json.dumps(res))
     else:
@@ -71,6 +78,11 @@ def print_report(res: dict, out=print) -> None:
             f"{_num(cpu and cpu['median'], '{:.3f}'):>10} "
             f"{_num(cpu_step and cpu_step['median'], '{:.2f}'):>7} "
             f"{c['of_jsbsim']:>8.2f} {_num(c['of_arducopter'], '{:.2f}'):>11}")
+    for name in ("campaign1", "campaign2"):
+        if name in res["cases"]:
+            c = res["cases"][name]
+            out(f"{c['label']:<34} {c['of_single_run']:.2f}x a single run "
+                f"({c['single_run_x']:.1f}x: the 1-job campaign's runs, median)")
     for name, why in res["skipped"].items():
         out(f"{name}: skipped: {why}")
     out("medians; worst: the slowest run below the median; wall/cpu us: per physics step; "
@@ -81,6 +93,8 @@ def print_report(res: dict, out=print) -> None:
         label = res["cases"][t["case"]]["label"]
         if t["figure"] == "of_jsbsim":
             what, fmt = "of bare JSBSim", "{:.2f}"
+        elif t["figure"] == "of_single_run":
+            what, fmt = "of a single run", "{:.2f}"
         else:
             what, fmt = "worst below median", "{:.1%}"
         out(f"  {label:<34} {what:<20} {fmt.format(t['measured']):>5} / {t['op']} "

@@ -1,7 +1,8 @@
 """The Foxglove layout of the repository (docs/foxglove_layout.json), built from the channels.
 
 Plots of attitude against its command and the FC's target, body rates
-against the rate targets, the motors, and a 3D view following the vehicle,
+against the rate targets, the motors, the IMU's vibration (largest gyro peak
+and band RMS over time), and a 3D view following the vehicle,
 all on the viewable channels of tools/logs/viz_log.py. The layout is Foxglove's
 exported-layout JSON (configById, layout, globalVariables, userNodes,
 playbackConfig), which "Import from file..." in the Layouts menu opens.
@@ -54,6 +55,13 @@ def layout() -> dict:
             "deg/s"),
         "Plot!motors": _plot("Motors (PWM the FC published)", [
             (f"/viz/motors.m{i}_us", f"motor {i}") for i in range(1, 5)], "us"),
+        # The IMU's spectrum, 10 times a second (tools/logs/viz_spectrum.py).
+        "Plot!vibration_hz": _plot("Vibration: largest gyro peak per axis", [
+            (f"/viz/vibration.gyro_{ax}_peak_hz", f"gyro {ax}") for ax in "xyz"], "Hz"),
+        "Plot!vibration_rms": _plot("Vibration: gyro and accel band RMS", [
+            *((f"/viz/vibration.gyro_{ax}_rms_rad_s", f"gyro {ax} [rad/s]") for ax in "xyz"),
+            *((f"/viz/vibration.accel_{ax}_rms_m_s2", f"accel {ax} [m/s^2]") for ax in "xyz")],
+            "rad/s, m/s^2"),
     }
     three_d = {
         "cameraState": {"distance": 4.0, "perspective": True, "phi": 60.0, "thetaOffset": 45.0,
@@ -86,7 +94,9 @@ def layout() -> dict:
                                            "second": "Plot!yaw"}},
                       "second": {"direction": "column", "first": "Plot!rates",
                                  "second": "Plot!motors"}},
-            "second": "3D!vehicle"},
+            "second": {"direction": "column", "splitPercentage": 60, "first": "3D!vehicle",
+                       "second": {"direction": "column", "first": "Plot!vibration_hz",
+                                  "second": "Plot!vibration_rms"}}},
     }
 
 

@@ -43,6 +43,7 @@ RATE_KEYS = {
     "/gnss": ("gnss_hz",),
     "/gt_att": ("gt_hz", "physics_hz"),
     "/gt_nav": ("gt_hz", "physics_hz"),
+    "/rotor": ("rotor_hz",),     # only a log that declares it (tools/logs/rotor_log.py)
     "/pwm": ("pwm_hz",),
     "/fc/status": ("pwm_hz",),
 }

@@ -142,3 +142,18 @@ def footer_and_magic(summary_start: int, offsets_start: int, summary: bytes) -> 
     the closing magic."""
     head = _FOOTER_HEAD.pack(OP_FOOTER, _FOOTER_LENGTH, summary_start, offsets_start)
     return head + _U32.pack(zlib.crc32(head, zlib.crc32(summary))) + MAGIC
+
+
+# The end of a finished file: Footer (head and summary CRC) and the closing magic.
+FOOTER_BYTES = _FOOTER_HEAD.size + 4 + len(MAGIC)
+DATA_END_BYTES = RECORD_PREFIX.size + 4   # DataEnd: prefix and its CRC
+
+
+def read_footer(tail: bytes) -> int:
+    """Where the summary section starts, from a finished file's last FOOTER_BYTES bytes
+    (ValueError if they are not a Footer and the magic: a cut or foreign file)."""
+    op, length, summary_start, _offsets = _FOOTER_HEAD.unpack_from(tail)
+    if len(tail) != FOOTER_BYTES or op != OP_FOOTER or length != _FOOTER_LENGTH \
+            or tail[-len(MAGIC):] != MAGIC:
+        raise ValueError("no MCAP footer at the end of the file")
+    return summary_start

@@ -34,12 +34,14 @@ from typing import Protocol
 
 from mcap.writer import CompressionType, Writer
 
-from silbridge.tools.logs.mcap_layout import (CHUNK_FIXED, CHUNK_HEAD, MAGIC, MESSAGE_FIXED,
-                                              MESSAGE_HEAD, OP_CHANNEL, OP_CHUNK,
+from silbridge.tools.logs.mcap_layout import (CHUNK_FIXED, CHUNK_HEAD, DATA_END_BYTES,
+                                              FOOTER_BYTES, MAGIC, MESSAGE_FIXED,
+                                              MESSAGE_HEAD, OP_CHANNEL, OP_CHUNK, OP_DATA_END,
                                               OP_METADATA_INDEX, OP_MESSAGE, OP_SCHEMA,
                                               OP_STATISTICS, channel_record, data_end_record,
                                               footer_and_magic, header_record,
                                               metadata_index_record, metadata_record,
+                                              read_footer,
                                               schema_record, split_message_records,
                                               statistics_record, summary_offset_record)
 
@@ -174,6 +176,47 @@ class McapFile:
         """Close without a summary (the file then reads as cut short)."""
         if not self._f.closed:
             self._f.close()
+
+    @classmethod
+    def reopen(cls, path) -> "McapFile":
+        """A finished file of ours, opened to write more records after its data: the summary,
+        footer and DataEnd are cut off and finish() writes them again, with what was there
+        plus what came since. For channels only one process can produce after another
+        process wrote the log (tools/logs/rotor_log.py: the bridge's /rotor of a
+        two-process flight). ValueError for a file without our footer (cut, compressed)."""
+        from mcap.reader import make_reader
+        with open(path, "rb") as fh:
+            fh.seek(0, os.SEEK_END)
+            size = fh.tell()
+            if size < len(MAGIC) + FOOTER_BYTES:
+                raise ValueError("too short for a finished MCAP file")
+            fh.seek(size - FOOTER_BYTES)
+            data_end = read_footer(fh.read(FOOTER_BYTES)) - DATA_END_BYTES
+            fh.seek(data_end)
+            if fh.read(1) != bytes([OP_DATA_END]):
+                raise ValueError("no DataEnd record before the summary")
+            fh.seek(0)
+            summary = make_reader(fh).get_summary()
+        if summary is None or summary.statistics is None or summary.chunk_indexes:
+            raise ValueError("not an unchunked file with statistics (McapFile writes those)")
+        self = cls.__new__(cls)
+        self._f = open(path, "r+b", buffering=0)
+        self._f.truncate(data_end)
+        self._f.seek(data_end)
+        self._fd = self._f.fileno()
+        self._pos = data_end
+        # Ids count up from 1 in call order (register_*), so the records keep their ids.
+        self._schemas = [schema_record(s.id, s.name, s.encoding, s.data)
+                         for s in sorted(summary.schemas.values(), key=lambda s: s.id)]
+        chans = sorted(summary.channels.values(), key=lambda c: c.id)
+        self._channels = [channel_record(c.id, c.schema_id, c.topic, c.message_encoding,
+                                         c.metadata) for c in chans]
+        st = summary.statistics
+        self._counts = {c.id: st.channel_message_counts.get(c.id, 0) for c in chans}
+        self._metadata_index = [(m.offset, m.length, m.name) for m in summary.metadata_indexes]
+        self._messages, self._chunks = st.message_count, st.chunk_count
+        self._start_ns, self._end_ns = st.message_start_time, st.message_end_time
+        return self
 
 
 class LibraryMcap:

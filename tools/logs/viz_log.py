@@ -12,6 +12,9 @@ channels), so the values are the batch's values by construction:
   /viz/fc        the FC: estimated and target attitude, filtered and target rates,
                  throttle_us
   /viz/motors    the PWM the FC published: m1_us .. m4_us
+  /viz/rotor     the motor model's rotor speeds (/rotor): m1_rpm .. m4_rpm, m1_rad_s .. m4_rad_s
+  /viz/vibration the IMU's spectrum 10 times a second: per gyro/accel axis the largest
+                 peak's frequency and amplitude and the band RMS (tools/logs/viz_spectrum.py)
   /viz/tf        foxglove.FrameTransform world -> base_link (ground truth), at most
                  VIEW3D_HZ (as the next three)
   /viz/tf_fc     foxglove.FrameTransform world -> base_link_fc (the FC's estimate)
@@ -38,6 +41,7 @@ from silbridge.tools.logs.mcap_layout import message_records
 from silbridge.tools.logs.viz_codec import (FixedMessage, cdr_items, pb_doubles, pb_message,
                                             pb_string, pb_timestamp, ros2msg_text)
 from silbridge.tools.logs.viz_frames import euler_from_quat, ned_to_enu, q_enu_flu, quat_from_euler
+from silbridge.tools.logs import viz_spectrum
 from silbridge.shm.records import NS_PER_S as _NS
 
 VIZ_HZ_DEFAULT = 1000.0
@@ -64,6 +68,11 @@ PLOTS = {
     "/viz/motors": ("silbridge_msgs/msg/VizMotors", "/pwm", [
         ("m1_us", "motor 1 PWM (front right)"), ("m2_us", "motor 2 PWM (rear left)"),
         ("m3_us", "motor 3 PWM (front left)"), ("m4_us", "motor 4 PWM (rear right)")]),
+    "/viz/rotor": ("silbridge_msgs/msg/VizRotor", "/rotor", [
+        *((f"m{i}_rpm", f"motor {i} rotor speed [rpm] (JSBSim fcs/m{i}-omega-rad_s)")
+          for i in range(1, 5)),
+        *((f"m{i}_rad_s", f"motor {i} rotor speed [rad/s]") for i in range(1, 5))]),
+    viz_spectrum.VIBRATION_CHANNEL: viz_spectrum.PLOT,     # 10 Hz, tools/logs/viz_spectrum.py
 }
 TRANSFORMS = {"/viz/tf": "base_link", "/viz/tf_fc": "base_link_fc",
               "/viz/tf_cmd": "base_link_cmd"}
@@ -79,6 +88,8 @@ SOURCES = {
     "/fc/status": ("q_est_wxyz", "euler_est_rad", "att_target_rad", "rate_frd_rad_s",
                    "rate_target_frd_rad_s", "throttle_us"),
     "/pwm": ("pwm_us",),
+    "/rotor": ("omega_rad_s", "rpm"),
+    viz_spectrum.SOURCE: viz_spectrum.SOURCE_FIELDS,
 }
 
 _XYZ = ["tx", "ty", "tz"]
@@ -122,6 +133,10 @@ def _plot_values(topic: str, rows: np.ndarray) -> dict:
                 out[f"{prefix}{ax}_deg_s"] = v[:, i]
         out["throttle_us"] = rows["throttle_us"]
         return out
+    if topic == "/viz/rotor":
+        rpm, w = rows["rpm"], rows["omega_rad_s"]
+        return {**{f"m{i + 1}_rpm": rpm[:, i] for i in range(4)},
+                **{f"m{i + 1}_rad_s": w[:, i] for i in range(4)}}
     us = rows["pwm_us"]
     return {f"m{i + 1}_us": us[:, i] for i in range(4)}
 
@@ -198,6 +213,7 @@ class VizChannels:
         s = self._scene.schema
         self._register(SCENE_CHANNEL, s.name, s.encoding, s.data, "protobuf")
         self._decimate = {src: _Decimate(viz_hz) for src in SOURCES if src != "/gt_nav"}
+        self._vibration = viz_spectrum.VibrationView(viz_hz)   # 10 Hz at most
         self._decimate3d = {src: _Decimate(min(viz_hz, VIEW3D_HZ))
                             for src in ("/gt_att", "/fc/status")}
         self._scene_decimate = _Decimate(min(viz_hz, SCENE_HZ))
@@ -236,6 +252,11 @@ class VizChannels:
 
     def _batch(self, source: str, rows: np.ndarray) -> None:
         sim_ns = rows["sim_ns"]
+        if source == viz_spectrum.SOURCE:
+            out = self._vibration.batch(rows)
+            if out is not None:
+                self._write_fixed(viz_spectrum.VIBRATION_CHANNEL, *out)
+            return
         if source == "/gt_nav":
             self._nav(sim_ns, rows["pos_ned_m"])
             return

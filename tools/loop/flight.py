@@ -171,6 +171,8 @@ def run_metadata(opts: FlightOptions, sc, sim, cfg, core) -> dict:
             "features_off": list(opts.features_off),
         },
         "scenario": sc.to_dict(),
+        # The drawn imperfections ([vehicle]), when the scenario asks for them.
+        **({"vehicle": sim.vehicle.to_dict()} if sim.vehicle.imperfect else {}),
         "params": core.params() if core is not None else {},
         "software": {"silbridge": package_version()},
     }
@@ -194,8 +196,9 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
                 from silbridge.tools.loop.run_log import open_run_sink
                 # The FC's C core logs the PWM it computes (the same records the
                 # bridge receives in lockstep): one memcpy instead of a Python call.
+                # sim: this process steps the physics, so the log gets /rotor too.
                 sink = open_run_sink(opts.log_path, run_metadata(opts, sc, sim, cfg, fc.core),
-                                     viz_hz=opts.viz_hz, live=opts.live, out=out)
+                                     viz_hz=opts.viz_hz, live=opts.live, out=out, sim=sim)
                 fc.sink = sink
                 fc.supervisor.sink = sink
             res = None
@@ -204,7 +207,7 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
                 with STOP.polling(), STOP.emergency(segment_unlinker(seg)):
                     res = run_bridge(sim, seg, cfg, sink=sink, out=_tee(out, sink, sim),
                                      fc_poll=in_process_poll(fc, fc_seg, seg, sim, opts.lockstep),
-                                     stop=STOP, notify=_in_process_notify(fc))
+                                     stop=STOP, notify=_in_process_notify(fc), fc_loop=fc)
             except BaseException as exc:
                 ended = {"aborted": f"{type(exc).__name__}: {exc}"}
                 raise
@@ -273,13 +276,18 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
             cmd += ["--feature-off", feature]
         cmd += param_at_args(param_events(sc))
         cmd += mavlink_cli_args(opts)
-        meta_path = None
+        meta_path = spool = None
         if opts.log_path or opts.live is not None:
             # The FC process writes the log (it sees every record and its own PWM);
             # it adds the parameter set to the metadata the bridge side knows.
             meta_path = f"{opts.log_path}.meta.json" if opts.log_path else \
                 os.path.join(tempfile.gettempdir(), f"{name}.meta.json")
             meta = run_metadata(opts, sc, sim, cfg, None)
+            spool = _rotor_spool(opts, sim) if sink is None else None
+            # /rotor's rate is not declared here: the bridge appends the spooled rows only
+            # to a log the FC finished, so a killed run's log would miss a declared channel.
+            if spool is not None:
+                sink = spool
             with open(meta_path, "w") as fh:
                 json.dump(meta, fh)
             cmd += ["--log-meta", meta_path] + (["--log", opts.log_path] if opts.log_path else [])
@@ -298,10 +306,14 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
                                  sink=sink, out=out, stop=STOP, notify=notices)
                 # The FC finishes and indexes the log before it prints its summary.
                 stdout, _ = proc.communicate(timeout=30)
+            if spool is not None:
+                _append_rotor(spool, opts.log_path, out)
         finally:
             stop_child(proc)
             if notices is not None:
                 notices.remove()
+            if spool is not None:
+                spool.discard()
     fc_summary = last_json_line(stdout)
     summary = summarise(opts, sc, sim, res, fc_summary)
     if meta_path:
@@ -309,6 +321,24 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
     if opts.log_path:
         summary["log"] = opts.log_path
     return summary
+
+
+def _rotor_spool(opts: FlightOptions, sim):
+    """The bridge's /rotor rows of a two-process flight with a log file: spooled beside the
+    log while the FC process writes it (tools/logs/rotor_log.py RotorSpool)."""
+    if not opts.log_path:
+        return None
+    from silbridge.tools.logs.rotor_log import RotorSpool
+    return RotorSpool(f"{opts.log_path}.rotor.spool", sim.rotor_rad_s)
+
+
+def _append_rotor(spool, log_path: str, out) -> None:
+    """Append the spooled /rotor rows to the log the FC process finished; a log it did not
+    finish (killed, cut short) is left as it is, and said so."""
+    try:
+        spool.append_into(log_path)
+    except (OSError, ValueError) as exc:
+        out(f"note: could not add /rotor to {log_path}: {exc}")
 
 
 def stop_child(proc, timeout_s: float = 10.0) -> None:

@@ -12,6 +12,7 @@ as the bridge received them; FC status and per-cycle timing from the FC side.
 from __future__ import annotations
 
 from silbridge.tools.logs.mcap_log import TIMING_DTYPE, LogWriter
+from silbridge.tools.logs.rotor_log import RotorLog, declare_rate
 
 TIMING_CHANNEL = "/timing"
 
@@ -21,7 +22,7 @@ class RunLogSink:
     records itself (capture_fc); measure the cost with `python -m silbridge.tools.logs.log_bench`."""
 
     def __init__(self, path, *, metadata: dict, fc_logs_pwm: bool = False, live=None,
-                 **writer_kw):
+                 rotor_rad_s=None, **writer_kw):
         self.writer = LogWriter(path, metadata=metadata, live=live, **writer_kw)
         self.live = live            # a tools.live_view.LiveView, closed with the sink
         self._cycles = 0
@@ -32,6 +33,9 @@ class RunLogSink:
         self.pwm_records = None if fc_logs_pwm else self.writer.write_records
         self._fc_logs_pwm = fc_logs_pwm
         self._unbind = None
+        # The bridge's per-step hook rotor(sim_ns) writing /rotor when this process also
+        # steps the physics (rotor_rad_s: Simulator.rotor_rad_s; tools/logs/rotor_log.py).
+        self.rotor = None if rotor_rad_s is None else RotorLog(self.writer, rotor_rad_s)
 
     def capture_fc(self, core_c, timing: bool = False):
         """Let the FC's C core append what it consumes straight into the log's queues
@@ -83,7 +87,7 @@ class RunLogSink:
 
 
 def open_run_sink(path, metadata: dict, *, viz_hz: float | None = None, live: str | None = None,
-                  out=print) -> RunLogSink:
+                  out=print, sim=None) -> RunLogSink:
     """The sink of `fly`/`fc`: the log at `path` (None: no file, a live view only), its
     viewable channels at viz_hz (None: the default), a live view on `live` (HOST:PORT,
     '' for the default address, None for none), announced through out()."""
@@ -94,6 +98,9 @@ def open_run_sink(path, metadata: dict, *, viz_hz: float | None = None, live: st
         out(f"live view: {view.url} (Foxglove: Open connection -> Foxglove WebSocket)")
     kw = {} if viz_hz is None else {"viz_hz": viz_hz}
     try:
+        if sim is not None:     # the physics runs here: log its rotor speeds per step
+            kw["rotor_rad_s"] = sim.rotor_rad_s
+            metadata = declare_rate(dict(metadata), 1e9 / sim.dt_ns)
         return RunLogSink(path, metadata=metadata, fc_logs_pwm=True, live=view, **kw)
     except BaseException:
         if view is not None:

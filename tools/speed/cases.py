@@ -95,3 +95,17 @@ def arducopter_own_physics(binary: str, duration_s: float) -> Case:
         return {"realtime_factor": r["realtime_factor"], "loop_cpu_s": None,
                 "sim_s": duration_s}
     return Case("arducopter", "ArduCopter SITL on its own physics (`--model quad`)", run)
+
+
+def campaign(duration_s: float, jobs: int, runs_per_scenario: int) -> Case:
+    """`silbridge bench`'s campaign, S1..S4 x runs_per_scenario, on `jobs` workers: its
+    overall factor (all simulated seconds over its wall time) and its runs' median factor."""
+    argv = ["silbridge.tools.speed.campaign_run", "--jobs", str(jobs), "--runs",
+            str(runs_per_scenario), "--duration", f"{duration_s:g}"]
+
+    def run() -> dict:
+        r = _child(argv, f"the campaign on {jobs} job(s)")
+        return {"realtime_factor": r["realtime_factor"], "loop_cpu_s": None,
+                "sim_s": r["sim_s"], "run_realtime_factor": r["run_realtime_factor"]}
+    return Case(f"campaign{jobs}", f"campaign, {4 * runs_per_scenario} runs, --jobs {jobs}",
+                run)

@@ -32,6 +32,8 @@ TARGETS = (
                                            "JSBSim"),
     Target("fly2", "worst_below_median", "<=", 0.2, "issue 25: two processes, the worst of "
                                                     "5 runs within 20 % of the median"),
+    Target("campaign2", "of_single_run", ">=", 1.6, "issue 25: the campaign on 2 jobs >= 1.6x "
+                                                    "a single run's speed"),
 )
 
 
@@ -76,3 +78,15 @@ def targets(cases: dict[str, dict]) -> list[dict]:
                          "op": t.op, "target": t.value, "met": t.met(measured),
                          "source": t.source})
     return rows
+
+
+def add_campaign(cases: dict[str, dict]) -> None:
+    """The campaign cases' overall factor over a single run's: the median of the runs' own
+    factors in the 1-job campaign (each run alone on the machine, in the same sitting)."""
+    if "campaign1" not in cases:
+        return
+    single = statistics.median(r["run_realtime_factor"] for r in cases["campaign1"]["runs"])
+    for name in ("campaign1", "campaign2"):
+        c = cases[name]
+        c["single_run_x"] = single
+        c["of_single_run"] = c["realtime_factor"]["median"] / single

@@ -10,17 +10,19 @@ from typing import Callable
 from silbridge.bridge.scenario import load_scenario
 
 from silbridge.tools.speed import cases as C
-from silbridge.tools.speed.figures import add_ratios, case_figures, targets
+from silbridge.tools.speed.figures import add_campaign, add_ratios, case_figures, targets
 
 
 def case_list(duration_s: float, physics_hz: float, *, imu_hz: int | None,
-              arducopter: str | None) -> list:
+              arducopter: str | None, campaign: int | None = None) -> list:
     """In run order: bare JSBSim first, so every round starts from the reference."""
     out = [C.bare_jsbsim(duration_s, physics_hz)]
     for log in (False, True):
         out += [C.flight(duration_s, n, log=log) for n in (1, 2)]
     if imu_hz:
         out += [C.flight(duration_s, n, imu_hz=imu_hz) for n in (1, 2)]
+    if campaign:
+        out += [C.campaign(duration_s, jobs, campaign) for jobs in (1, 2)]
     if arducopter:
         out.append(C.arducopter_own_physics(arducopter, duration_s))
     return out
@@ -31,11 +33,13 @@ def physics_rate_hz() -> float:
 
 
 def measure(duration_s: float, runs: int, *, imu_hz: int | None = None,
-            arducopter: str | None = None, skipped: dict | None = None,
+            arducopter: str | None = None, campaign: int | None = None,
+            skipped: dict | None = None,
             progress: Callable[[str], None] = lambda s: None) -> dict:
     """The `silbridge speed --json` object. skipped: {case name: why} for cases left out."""
     physics_hz = physics_rate_hz()
-    todo = case_list(duration_s, physics_hz, imu_hz=imu_hz, arducopter=arducopter)
+    todo = case_list(duration_s, physics_hz, imu_hz=imu_hz, arducopter=arducopter,
+                     campaign=campaign)
     done: dict[str, list[dict]] = {c.name: [] for c in todo}
     for i in range(runs):
         for c in todo:
@@ -45,6 +49,8 @@ def measure(duration_s: float, runs: int, *, imu_hz: int | None = None,
     figures = {c.name: {"label": c.label, "runs": done[c.name]} |
                case_figures(done[c.name], physics_hz) for c in todo}
     add_ratios(figures)
+    add_campaign(figures)
     return {"scenario": C.SCENARIO, "physics_hz": physics_hz, "duration_s": duration_s,
-            "runs": runs, "imu_hz": imu_hz, "order": [c.name for c in todo],
+            "runs": runs, "imu_hz": imu_hz, "campaign": campaign,
+            "order": [c.name for c in todo],
             "cases": figures, "targets": targets(figures), "skipped": skipped or {}}

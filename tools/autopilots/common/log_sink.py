@@ -64,6 +64,7 @@ from silbridge.shm.records import PWM_DTYPE, RECORD_DTYPE, RECORD_SIZE, Kind
 
 from silbridge.tools.logs.fc_target import FC_TARGET_DTYPE, TARGET_CHANNEL, CommandLog, TargetFeed
 from silbridge.tools.logs.mcap_log import TIMING_CHANNEL, TIMING_DTYPE, LogWriter
+from silbridge.tools.logs.rotor_log import RotorLog
 from silbridge.shm.records import NS_PER_S
 
 STATUS_CHANNEL = "/fc/status"
@@ -124,6 +125,8 @@ class AutopilotLogSink:
         self.commands = CommandLog(self.writer)
         # One struct pack per row (LogWriter.pack): numpy field stores cost ~1 us each.
         self.writer.declare(STATUS_CHANNEL, AP_STATUS_DTYPE)
+        # /rotor: the motor model's rotor speeds per step (the caller declares config.rotor_hz).
+        self.rotor = RotorLog(self.writer, None)
         self.target = target
         self.command = command
         self.duration_ns = int(round(duration_s * 1e9))
@@ -154,9 +157,9 @@ class AutopilotLogSink:
         held_timing, self._held_timing = self._held_timing, []
         if self._pending_ns == self.t0_ns:
             end_ns = self.t0_ns + self.duration_ns
-            for recs, pwm, row in held:
+            for recs, pwm, row, rotor in held:
                 if row[0] < end_ns:
-                    self._write(recs, pwm, row)
+                    self._write(recs, pwm, row, rotor)
             for row in held_timing:
                 self.timing(*row)
 
@@ -193,12 +196,13 @@ class AutopilotLogSink:
                    cmd.last_thrust)
         else:
             row = (applied_ns, 0.0, 0.0, 0.0, ar, ap, ay, source, 0, 0.5)
+        rotor = (sim.sim_ns, sim.rotor_rad_s())
         if in_window:
-            self._write(recs, pwm, row)
+            self._write(recs, pwm, row, rotor)
         else:   # the Simulator reuses its record buffers: hold copies
-            self._held_steps.append((recs.copy(), pwm.copy(), row))
+            self._held_steps.append((recs.copy(), pwm.copy(), row, rotor))
 
-    def _write(self, recs, pwm, row) -> None:
+    def _write(self, recs, pwm, row, rotor) -> None:
         t0 = self.t0_ns
         # The step's records and its PWM record, moved onto the log clock in their bytes:
         # a few struct calls where numpy masks, copies and field updates cost ~50 us.
@@ -214,6 +218,7 @@ class AutopilotLogSink:
         if setpoints:   # the Simulator's profile (from boot): not this log's command
             out = out[out["kind"] != _SETPOINT_KIND]
         self.writer.write_records(out)
+        self.rotor.write(rotor[0] - t0, rotor[1])
         self.writer.pack(STATUS_CHANNEL, row[0] - t0, *row[1:])
         alt = self.command.command[3] if self.command is not None else math.nan
         self.commands.write(row[0] - t0, row[1], row[2], row[3], alt)

@@ -149,6 +149,7 @@ def flight_metadata(sc, sim, *, fc: str, physics_hz: float, duration_s: float, t
     return {
         "config": {
             "imu_hz": sim.imu_hz, "pwm_hz": physics_hz, "physics_hz": physics_hz,
+            "rotor_hz": physics_hz,     # /rotor, written per step by the log sink
             "baro_hz": sc.baro_hz, "mag_hz": sc.mag_hz, "gnss_hz": sc.gnss_hz,
             "duration_s": duration_s, "seed": sc.seed, "transport": transport,
             "processes": 2, "mode": mode, "features_off": [], "fc": fc, **config,

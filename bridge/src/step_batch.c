@@ -1,0 +1,259 @@
+/*
+ * step_batch.c - N lockstep steps of bridge and in-process FC in one call (`silbridge fly
+ * --processes 1`): Kernel.bind_lockstep, run_batch and finish_step, the CPython side.
+ * It runs the kernel's step (step_run.c) and calls the FC's poll; the ring side of each
+ * step is plain C (step_lockstep.c).
+ *
+ * One step, as the Python path (publish_step, FcLoop.poll, collect_pwm) does it, in the
+ * same order: the kernel's step with the held PWM -> its records to the trace and the
+ * sensor ring, BRIDGE_SIM_NS -> the errors' sample, the rotor row -> the FC's C poll
+ * (Core.poll_io, the record router) -> the PWM back, traced with wall_ns zeroed ->
+ * FC_SIM_NS checked. The trace holds the bytes the trace hash would have been fed step by
+ * step: blake2b hashes a stream, so Python hashing the batch's trace once gives the digest.
+ *
+ * A step whose kernel flags need Python (noise refills, a GNSS fix or setpoint due, ground
+ * contact, crashes: the F_* flags above the count byte) ends the batch right after the
+ * kernel ran it: io[PENDING] holds its flags, Python does its part (Simulator.step_batch:
+ * _after_step) and finish_step(count) does the rest. Python chooses N so that every other
+ * step with Python work (a disturbance switch, the FC supervisor's and the log's due polls,
+ * the start-up checks) is the last of a batch.
+ *
+ * The FC's poll is called through its bound method: the record router lives in another
+ * extension; one vectorcall (~50 ns) a step is not worth a capsule of function pointers.
+ * No heap in the step: the buffers are the caller's; the four PWM floats the setters take
+ * are rebuilt only when the command changes.
+ */
+#include "step_kernel.h"
+
+void sb_batch_clear(sb_batch *b)
+{
+    Py_CLEAR(b->capsule);
+    Py_CLEAR(b->fc_poll);
+    for (int i = 0; i < 4; i++)
+        Py_CLEAR(b->pwm_obj[i]);
+    sb_step_release(&b->trace);
+    sb_step_release(&b->pwm);
+    sb_step_release(&b->io);
+    sb_step_release(&b->rotor);
+    sb_step_release(&b->errors);
+    memset(&b->ls, 0, sizeof b->ls);
+}
+
+int sb_batch_traverse(sb_batch *b, visitproc visit, void *arg)
+{
+    Py_VISIT(b->capsule);
+    Py_VISIT(b->fc_poll);
+    return 0;
+}
+
+/* A writable C-contiguous buffer of at least min_bytes, whole `item`-byte items. */
+static int take_buffer(PyObject *obj, Py_buffer *v, Py_ssize_t min_bytes, Py_ssize_t item,
+                       const char *what)
+{
+    if (PyObject_GetBuffer(obj, v, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+        return -1;
+    if (v->len < min_bytes || v->len % item != 0 || ((uintptr_t)v->buf & 7u) != 0) {
+        PyErr_Format(PyExc_ValueError, "%s must be an 8-byte aligned writable buffer of "
+                     "%zd-byte items, at least %zd bytes", what, item, min_bytes);
+        PyBuffer_Release(v);
+        return -1;
+    }
+    return 0;
+}
+
+/* The buffers' views, and the plain-C state pointing into them. */
+static int take_buffers(Kernel *self, PyObject *trace, PyObject *pwm, PyObject *io,
+                        PyObject *errors, PyObject *rotor)
+{
+    sb_batch *b = &self->batch;
+    const Py_ssize_t rec = (Py_ssize_t)sizeof(sb_record);
+    if (take_buffer(trace, &b->trace, rec * (self->n_slots + 16), 1, "trace") < 0 ||
+        take_buffer(pwm, &b->pwm, rec, rec, "pwm") < 0 ||
+        take_buffer(io, &b->io, 8 * SB_IO_WORDS, 8, "io") < 0 ||
+        sb_step_get_f64(errors, &b->errors, SB_ERR_COUNT, 1, "errors") < 0 ||
+        (rotor != Py_None && take_buffer(rotor, &b->rotor, 32, 32, "rotor") < 0))
+        return -1;
+    sb_lockstep *l = &b->ls;
+    l->trace = b->trace.buf;
+    l->trace_len = (size_t)b->trace.len;
+    l->pwm = b->pwm.buf;
+    l->pwm_cap = (size_t)(b->pwm.len / rec);
+    l->io = b->io.buf;
+    l->errors = b->errors.buf;
+    l->rotor = b->rotor.obj != NULL ? b->rotor.buf : NULL;
+    l->rotor_rows = b->rotor.obj != NULL ? (size_t)(b->rotor.len / 32) : 0;
+    return 0;
+}
+
+/* bind_lockstep(segment, fc_poll, trace, pwm, io, errors, rotor, bridge_word, fc_word) */
+PyObject *Kernel_bind_lockstep(Kernel *self, PyObject *args, PyObject *kwds)
+{
+    static char *kwlist[] = {"segment", "fc_poll", "trace", "pwm", "io", "errors", "rotor",
+                             "bridge_word", "fc_word", NULL};
+    PyObject *cap, *poll, *trace, *pwm, *io, *errors, *rotor;
+    int bw, fw;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OOOOOOOii", kwlist, &cap, &poll, &trace,
+                                     &pwm, &io, &errors, &rotor, &bw, &fw))
+        return NULL;
+    sb_batch *b = &self->batch;
+    sb_batch_clear(b);
+    const sb_capi *api = PyCapsule_GetPointer(cap, SB_CAPI_CAPSULE);
+    if (api == NULL)
+        return NULL;
+    if (api->version != SB_CAPI_VERSION || !api->is_owner || bw < 0 || fw < 0 ||
+        bw >= (int)SB_SEG_WORDS || fw >= (int)SB_SEG_WORDS ||
+        (poll != Py_None && !PyCallable_Check(poll))) {
+        PyErr_SetString(PyExc_ValueError, "bind_lockstep needs the bridge (owner) side of a "
+                        "segment of this shm version, the FC's poll (None: the FC runs in its "
+                        "own process) and two word indices");
+        return NULL;
+    }
+    if (take_buffers(self, trace, pwm, io, errors, rotor) < 0) {
+        sb_batch_clear(b);
+        return NULL;
+    }
+    b->capsule = Py_NewRef(cap);
+    b->fc_poll = poll == Py_None ? NULL : Py_NewRef(poll);
+    b->ls.api = api;
+    b->ls.bridge_word = bw;
+    b->ls.fc_word = fw;
+    Py_RETURN_NONE;
+}
+
+/* The held pulse widths (io) as the float objects the setters take. */
+static int held_pwm(sb_batch *b, const int64_t *io)
+{
+    for (int i = 0; i < 4; i++) {
+        if (b->pwm_obj[i] != NULL && b->pwm_held[i] == io[SB_IO_PWM_US + i])
+            continue;
+        PyObject *f = PyFloat_FromDouble((double)io[SB_IO_PWM_US + i]);
+        if (f == NULL)
+            return -1;
+        Py_XSETREF(b->pwm_obj[i], f);
+        b->pwm_held[i] = io[SB_IO_PWM_US + i];
+    }
+    return 0;
+}
+
+/* How long one wait for an FC in its own process lasts before Python looks at that FC
+ * (PeerWatch; the same slice as bridge_driver.py _wait_lockstep). */
+#define SB_FC_WAIT_SLICE_NS 20000000
+
+/* The FC's poll of this step; 0, or -1 with its exception set. */
+static int fc_poll(sb_batch *b, int64_t *io)
+{
+    PyObject *r = PyObject_CallNoArgs(b->fc_poll);
+    if (r == NULL)
+        return -1;
+    const long n = PyLong_AsLong(r);
+    Py_DECREF(r);
+    if (n == -1 && PyErr_Occurred())
+        return -1;
+    if (n > 0) {
+        io[SB_IO_POLLS]++;
+        io[SB_IO_LAST_POLL] = n;
+    }
+    return 0;
+}
+
+/* The rest of a step the kernel has run, its `count` records in the slots: published, the
+ * FC polled, the PWM collected. 1, 0 the FC did not answer, -1 error. */
+static int finish(Kernel *self, size_t count)
+{
+    sb_lockstep *l = &self->batch.ls;
+    const int64_t k = self->step_index, sim_ns = k * self->dt_ns;
+    sb_lockstep_publish(l, self->slots, count, sim_ns);
+    sb_lockstep_after_step(l, self->stage.state, k, sim_ns);
+    if (self->batch.fc_poll == NULL) {
+        /* The FC in its own process: the lockstep hand-off (shm/include/sb_handoff.h). Not
+         * answered within a slice: the step ends the batch unanswered (io FC_MISSED) and
+         * Python looks at the FC, then waits on and collects (bridge_driver.py). */
+        const int w = l->api->wait_step(l->api, (uint64_t)sim_ns, SB_FC_WAIT_SLICE_NS);
+        if (w < 0)
+            return -1;
+        if (w == 0) {
+            l->io[SB_IO_DONE]++;
+            l->io[SB_IO_FC_MISSED] = 1;
+            return 0;
+        }
+    } else if (fc_poll(&self->batch, l->io) < 0) {
+        return -1;
+    }
+    sb_lockstep_collect(l);
+    l->io[SB_IO_DONE]++;
+    return sb_lockstep_answered(l, sim_ns);
+}
+
+/* One lockstep step: 1 done, 0 the kernel flagged Python work (io PENDING) or the FC did
+ * not answer, -1 error. */
+static int batch_step(Kernel *self)
+{
+    int64_t *io = self->batch.ls.io;
+    if (held_pwm(&self->batch, io) < 0)
+        return -1;
+    const long flags = sb_step_run_items(self, self->batch.pwm_obj, 0);
+    if (flags < 0)
+        return -1;
+    if (flags & 0xFF00) {
+        io[SB_IO_PENDING] = flags;
+        return 0;
+    }
+    return finish(self, (size_t)(flags & 0xFF));
+}
+
+/* The batch's checks: bound, an IMU-writing kernel, an open segment. */
+static int batch_ready(Kernel *self)
+{
+    const sb_lockstep *l = &self->batch.ls;
+    if (l->api == NULL || !self->stage.scalar_imu) {
+        PyErr_SetString(PyExc_RuntimeError, "run_batch needs bind_lockstep() and a kernel "
+                                            "that writes the IMU (one sample per step)");
+        return -1;
+    }
+    if (l->api->seg->base == NULL) {
+        PyErr_SetString(PyExc_RuntimeError, "the segment is closed");
+        return -1;
+    }
+    return 0;
+}
+
+/* run_batch(n) -> steps done (io: what happened; see SB_IO_*). */
+PyObject *Kernel_run_batch(Kernel *self, PyObject *arg)
+{
+    const Py_ssize_t n = PyLong_AsSsize_t(arg);
+    if ((n == -1 && PyErr_Occurred()) || batch_ready(self) < 0)
+        return NULL;
+    sb_lockstep *l = &self->batch.ls;
+    int64_t *io = l->io;
+    io[SB_IO_TRACE_BYTES] = io[SB_IO_PENDING] = io[SB_IO_DONE] = 0;
+    io[SB_IO_FC_MISSED] = io[SB_IO_POLLS] = 0;
+    /* A step needs room for its records and the PWM of a poll (16: many per step). */
+    const size_t step_bytes = (size_t)(self->n_slots + 16) * sizeof(sb_record);
+    const Py_ssize_t rows = l->rotor != NULL ? (Py_ssize_t)l->rotor_rows : n;
+    for (Py_ssize_t k = 0; k < n && k < rows && sb_lockstep_room(l) >= step_bytes; k++) {
+        const int rc = batch_step(self);
+        if (rc < 0)
+            return NULL;
+        if (rc == 0)
+            break;
+    }
+    return PyLong_FromLongLong(io[SB_IO_DONE]);
+}
+
+/* finish_step(count) -> steps done: the step run_batch left pending, once Python has done
+ * its part (its `count` records in the slots now), finished as batch_step finishes its own
+ * (run_batch left it a step's room in the trace). */
+PyObject *Kernel_finish_step(Kernel *self, PyObject *arg)
+{
+    const Py_ssize_t count = PyLong_AsSsize_t(arg);
+    if ((count == -1 && PyErr_Occurred()) || batch_ready(self) < 0)
+        return NULL;
+    int64_t *io = self->batch.ls.io;
+    if (io[SB_IO_PENDING] == 0 || count < 0 || count > self->n_slots) {
+        PyErr_SetString(PyExc_RuntimeError, "finish_step(count) finishes the step run_batch "
+                                            "left pending, with at most a step buffer's records");
+        return NULL;
+    }
+    io[SB_IO_PENDING] = 0;
+    return finish(self, (size_t)count) < 0 ? NULL : PyLong_FromLongLong(io[SB_IO_DONE]);
+}

@@ -1,0 +1,100 @@
+/*
+ * step_lockstep.c - the ring side of a one-process lockstep step (step_lockstep.h): plain
+ * C over the segment's rings and words, the clock, and the caller's buffers. The same
+ * operations, in the same order, as the Python path (bridge/bridge_loop.py), so the records,
+ * the PWM and the trace bytes are the same.
+ */
+#define _GNU_SOURCE /* syscall() for the doorbell (sb_doorbell.h), clock_gettime */
+#include "step_lockstep.h"
+
+#include <math.h>
+#include <string.h>
+#include <time.h>
+
+#include "sensor_stage.h"
+
+static int64_t monotonic_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + (int64_t)ts.tv_nsec;
+}
+
+/* Append n records to the trace (the caller checked the room: sb_lockstep_room). */
+static void trace_append(sb_lockstep *l, const sb_record *r, size_t n)
+{
+    memcpy(l->trace + l->io[SB_IO_TRACE_BYTES], r, n * sizeof *r);
+    l->io[SB_IO_TRACE_BYTES] += (int64_t)(n * sizeof *r);
+}
+
+/* The Python path rings the doorbell after the push and after the word; nobody waits in
+ * between, so one ring after both does the same. */
+void sb_lockstep_publish(sb_lockstep *l, const sb_record *recs, size_t n, int64_t sim_ns)
+{
+    const sb_capi *api = l->api;
+    trace_append(l, recs, n);
+    (void)sb_ring_push_batch(&api->rings[SB_RING_SENSORS], recs, n, monotonic_ns());
+    atomic_store_explicit(sb_capi_word(api, l->bridge_word), (uint64_t)sim_ns,
+                          memory_order_release);
+    sb_bell_ring(sb_segment_my_bell(api->seg));
+}
+
+/* BridgeLoop._sample_errors's arithmetic, so the same doubles: Python's x ** 2 is libm's
+ * pow, and this extension is built without FMA contraction (setup.py). */
+static void sample_errors(sb_lockstep *l, const double *st, int64_t k, int64_t sim_ns)
+{
+    const int64_t every = l->io[SB_IO_ERR_EVERY];
+    if (every <= 0 || k % every != 0 || sim_ns < l->io[SB_IO_ERR_FROM_NS])
+        return;
+    double *e = l->errors;
+    const double er = st[ST_EULER] - e[SB_ERR_CMD_ROLL];
+    const double ep = st[ST_EULER + 1] - e[SB_ERR_CMD_PITCH];
+    const double alt = st[ST_HAGL] - e[SB_ERR_HOME_AGL];
+    l->io[SB_IO_ERR_N]++;
+    e[SB_ERR_ATT_SQ] += er * er + ep * ep;
+    e[SB_ERR_ALT_SQ] += pow(alt - e[SB_ERR_CMD_ALT], 2.0);
+}
+
+void sb_lockstep_after_step(sb_lockstep *l, const double *state, int64_t k, int64_t sim_ns)
+{
+    sample_errors(l, state, k, sim_ns);
+    const int64_t row = l->io[SB_IO_DONE];
+    if (l->rotor != NULL && row >= 0 && (size_t)row < l->rotor_rows)
+        memcpy(l->rotor + 4 * row, state + ST_OMEGA, 4 * sizeof *l->rotor);
+}
+
+/* At most as many records as the trace has room for: a lockstep poll answers one step. */
+void sb_lockstep_collect(sb_lockstep *l)
+{
+    int64_t *io = l->io;
+    const size_t room = sb_lockstep_room(l) / sizeof(sb_record);
+    const size_t cap = l->pwm_cap < room ? l->pwm_cap : room;
+    sb_record *pwm = l->pwm;
+    const uint64_t n = sb_ring_pop_batch(&l->api->rings[SB_RING_ACTUATORS], pwm, cap);
+    if (n == 0)
+        return;
+    const sb_record *last = &pwm[n - 1];
+    for (int i = 0; i < 4; i++)
+        io[SB_IO_PWM_US + i] = last->u.pwm.pwm_us[i];
+    io[SB_IO_ARMED] = last->u.pwm.armed != 0;
+    if (io[SB_IO_PWM_FIRST_SIM] < 0) {
+        io[SB_IO_PWM_FIRST_SIM] = pwm[0].h.sim_ns;
+        io[SB_IO_PWM_FIRST_WALL] = pwm[0].h.wall_ns;
+    }
+    io[SB_IO_PWM_LAST_SIM] = last->h.sim_ns;
+    io[SB_IO_PWM_LAST_WALL] = last->h.wall_ns;
+    io[SB_IO_PWM_RECEIVED] += (int64_t)n;
+    for (uint64_t i = 0; i < n; i++)
+        pwm[i].h.wall_ns = 0;   /* hashed without wall-clock stamps, as collect_pwm */
+    trace_append(l, pwm, n);
+}
+
+int sb_lockstep_answered(sb_lockstep *l, int64_t sim_ns)
+{
+    const uint64_t fc_ns = atomic_load_explicit(sb_capi_word(l->api, l->fc_word),
+                                                memory_order_acquire);
+    if (fc_ns >= (uint64_t)sim_ns)
+        return 1;
+    l->io[SB_IO_FC_MISSED] = 1;
+    return 0;
+}

@@ -1,0 +1,63 @@
+/*
+ * sb_handoff.h - the lockstep hand-off: how one side waits for the other's step.
+ *
+ * In lockstep (the RUN_MODE word says so) the bridge (owner) waits for FC_SIM_NS and the
+ * FC (peer) for the sensor records of the next step, millions of times a run. Each wait
+ * spins up to the budget of the way of waiting in use (sb_handoff_choice.h), watching the
+ * clock: a spin that was preempted (the clock jumped) or ran out stops and the wait blocks
+ * on the other side's doorbell (sb_doorbell.h, no lost wake-up). The owner chooses the
+ * way by measuring its steps and publishes it in the segment header (`handoff_arm`); the
+ * peer follows it and publishes how many of its spins ran out or were preempted
+ * (`peer_trouble`), which the owner's choice counts with its own.
+ *
+ * Waits outside lockstep (real time, tests, tools) keep sb_bell_wait_after_yield.
+ * Nothing here holds or touches the GIL: the callers release it around sb_handoff_wait.
+ */
+#ifndef SB_HANDOFF_H
+#define SB_HANDOFF_H
+
+#include <stdint.h>
+
+#include "sb_doorbell.h"
+#include "sb_handoff_choice.h"
+#include "sb_wait.h"
+
+/* A spin's clock readings more than this apart: the thread was off its core meanwhile. */
+#define SB_HANDOFF_GAP_NS 20000
+/* SILBRIDGE_HANDOFF=spin|brief|block fixes the owner's way (A/B runs, odd machines);
+ * unset or "auto": measured. */
+#define SB_HANDOFF_ENV "SILBRIDGE_HANDOFF"
+
+/* What one process's hand-off waits did (statistics; `trouble` feeds the choice). */
+typedef struct sb_handoff_stats {
+    uint64_t waits;     /* hand-off waits */
+    uint64_t ready;     /* the data was there before any spin */
+    uint64_t spun;      /* ended by data while spinning */
+    uint64_t ran_out;   /* spun the whole budget, then blocked */
+    uint64_t preempted; /* the spin lost its core, then blocked */
+    uint64_t blocked;   /* blocked on the doorbell (ran_out, preempted, or no spin) */
+    uint64_t timeouts;  /* reached the deadline without data */
+    uint64_t wait_ns;   /* time spent in waits that did not find the data at once [ns] */
+} sb_handoff_stats;
+
+/* One process's side of the hand-off of one segment (kept in its Segment object). */
+typedef struct sb_handoff {
+    sb_handoff_stats stats;
+    sb_handoff_choice choice; /* the owner's; the peer follows the header's handoff_arm */
+    uint64_t trouble_published; /* peer: the trouble count last stored in the header */
+} sb_handoff;
+
+/* The arm SILBRIDGE_HANDOFF names, or -1 (auto). */
+int sb_handoff_env_arm(void);
+
+/* Spin up to spin_ns for ready(ctx), then block on bell until it or the deadline.
+ * 1: ready; 0: the deadline passed. */
+int sb_handoff_wait(sb_handoff_stats *st, sb_doorbell *bell, sb_ready_fn ready, const void *ctx,
+                    int64_t spin_ns, int64_t deadline_ns);
+
+static inline uint64_t sb_handoff_trouble(const sb_handoff_stats *st)
+{
+    return st->ran_out + st->preempted;
+}
+
+#endif /* SB_HANDOFF_H */
