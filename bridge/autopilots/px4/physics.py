@@ -78,7 +78,7 @@ class Px4Physics:
         self._pwm["kind"] = Kind.PWM
         self._pwm["channel_count"] = MOTORS
         self._pwm_seq = 0
-        self._held: list = []        # (sim_ns, records) of the step's physics steps, for the log
+        self._held: list = []        # (sim_ns, records, rotor row) of the step's physics steps, for the log
         self._timing = None
         self._rx_ns = 0
         self._prev_rx_ns = 0
@@ -117,7 +117,8 @@ class Px4Physics:
             recs = sim.step(motors)
             acc.add(recs)
             if self.sink is not None:     # the Simulator reuses its buffer: keep a copy
-                held.append((t_ns, recs.copy()))
+                # The rotor speeds too: the sink writes these steps later, at `sent`.
+                held.append((t_ns, recs.copy(), (sim.sim_ns, tuple(sim.rotor_rad_s()))))
         self.steps += 1
         if freewheel:
             self.freewheel_steps += 1
@@ -144,11 +145,11 @@ class Px4Physics:
         p["armed"] = 1 if self.armed else 0
         p["fc_step_seq"] = self.replies
         p["imu_sim_ns"] = applied
-        for t_ns, recs in self._held:
+        for t_ns, recs, rotor in self._held:
             p["seq"] = self._pwm_seq    # one PWM record per physics step (held outputs)
             self._pwm_seq += 1
             p["sim_ns"] = t_ns
-            sink.step(recs, p, self.sim)
+            sink.step(recs, p, self.sim, rotor=rotor)
         self._held.clear()
         period = rx - self._prev_rx_ns if self._prev_rx_ns and rx else 0
         if rx:

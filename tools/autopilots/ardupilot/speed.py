@@ -186,7 +186,7 @@ class _Profile:
         self.physics = physics
         self.rows: list = []
 
-    def step(self, recs, pwm, sim) -> None:
+    def step(self, recs, pwm, sim, rotor=None) -> None:
         pass
 
     def timing(self, applied_ns, rx, done, tx, period) -> None:

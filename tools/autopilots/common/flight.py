@@ -41,7 +41,7 @@ class BenchStepHooks:
     def takeoff_accepted(self) -> None:
         self._accepted = True
 
-    def step(self, recs, pwm, sim) -> None:
+    def step(self, recs, pwm, sim, rotor=None) -> None:
         log = self.log
         if log.t0_ns is None:
             sent = self._sent_ns
@@ -53,7 +53,7 @@ class BenchStepHooks:
                 log.start_at(self._pending_ns)
         # Before the log writes the step, so its status row holds the command just sent.
         self.forwarder.step(int(pwm["sim_ns"][0]))
-        log.step(recs, pwm, sim)
+        log.step(recs, pwm, sim, rotor)
 
 
 class BenchWiring:

@@ -176,7 +176,9 @@ class AutopilotLogSink:
         return self.t0_ns is None and pending is not None and \
             pending <= applied_ns < pending + self._hold_max
 
-    def step(self, recs, pwm, sim) -> None:
+    def step(self, recs, pwm, sim, rotor=None) -> None:
+        """One physics step's records and PWM; `rotor` (sim_ns, four rad/s) when the caller
+        logs a step after the simulator moved on (PX4 sends several steps per packet)."""
         self.last_sim_ns = sim.sim_ns
         feed = self.target_feed
         if feed is not None:
@@ -196,7 +198,8 @@ class AutopilotLogSink:
                    cmd.last_thrust)
         else:
             row = (applied_ns, 0.0, 0.0, 0.0, ar, ap, ay, source, 0, 0.5)
-        rotor = (sim.sim_ns, sim.rotor_rad_s())
+        if rotor is None:
+            rotor = (sim.sim_ns, sim.rotor_rad_s())
         if in_window:
             self._write(recs, pwm, row, rotor)
         else:   # the Simulator reuses its record buffers: hold copies

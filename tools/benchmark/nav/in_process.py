@@ -26,7 +26,7 @@ class GroundTruthLog:
         from silbridge.tools.logs.mcap_log import LogWriter
         self.writer = LogWriter(path, metadata=metadata, viz_hz=0)
 
-    def step(self, recs, pwm, sim) -> None:
+    def step(self, recs, pwm, sim, rotor=None) -> None:
         kind = recs["kind"]
         self.writer.write_records(recs[(kind == _GT_KINDS[0]) | (kind == _GT_KINDS[1])])
 
