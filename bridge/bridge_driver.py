@@ -247,25 +247,12 @@ class _Flight:
         (fc.python_due), the first window's checks, the duration. A stop is seen between
         batches (at most BATCH_MAX_STEPS steps, ~1 ms); a crash is flagged by the kernel, so
         it ends its batch and the run at the crashing step."""
-        loop, cfg, sim = self.loop, self.cfg, self.loop.sim
-        stop = self.stop
-        last = self.steps[-1] if isinstance(self.steps, range) else math.inf
-        self.t0 = time.monotonic_ns()
-        self.cpu0 = time.thread_time()
-        k = 1
-        while k <= last:
-            if stop.requested:
-                self._stopped()
-                break
+        loop = self.loop
+
+        def batch(k, last) -> None:
             self.steps_in_c += loop.run_batch(self._batch_len(k, last, fc))
             fc.after_c_polls(*loop.batch_polls())
-            k = sim.step_index + 1
-            if sim.step_index == self.check_step:
-                self.checks.extend(first_window_checks(loop, cfg, time.monotonic_ns() - self.t0,
-                                                       self.out, None))
-            if sim.crashed:
-                self.out(f"vehicle crashed at t={sim.sim_ns / _NS:.3f} s; run stopped")
-                break
+        self._fly_batches(batch)
 
     def fly_batched_own_fc(self) -> None:
         """fly() for an FC in its own process in lockstep: the steps run in batches in C, each
@@ -273,7 +260,24 @@ class _Flight:
         at the 20 ms look at the FC (PeerWatch), the first window's checks, the duration. The
         FC's own Python is its process's business. A step the FC did not answer within a
         slice is finished by _wait_lockstep, which looks at the FC while it waits."""
-        loop, cfg, sim, stop, every = self.loop, self.cfg, self.loop.sim, self.stop, self.watch_every
+        loop, sim, every = self.loop, self.loop.sim, self.watch_every
+
+        def batch(k, last) -> None:
+            n = min(BATCH_MAX_STEPS, last - k + 1, every - (k - 1) % every)
+            if k <= self.check_step:
+                n = min(n, self.check_step - k + 1)
+            self.steps_in_c += loop.run_batch(n)
+            if loop.fc_pending:
+                loop.fc_pending = False
+                _wait_lockstep(loop, self.peer)
+            if sim.step_index % every == 0:
+                self._look()
+        self._fly_batches(batch)
+
+    def _fly_batches(self, batch) -> None:
+        """The batched loop of both FC placements: `batch(k, last)` runs one batch from step
+        k; between batches a stop request, the first window's checks and a crash are seen."""
+        loop, cfg, sim, stop = self.loop, self.cfg, self.loop.sim, self.stop
         last = self.steps[-1] if isinstance(self.steps, range) else math.inf
         self.t0 = time.monotonic_ns()
         self.cpu0 = time.thread_time()
@@ -282,16 +286,8 @@ class _Flight:
             if stop.requested:
                 self._stopped()
                 break
-            n = min(BATCH_MAX_STEPS, last - k + 1, every - (k - 1) % every)
-            if k <= self.check_step:
-                n = min(n, self.check_step - k + 1)
-            self.steps_in_c += loop.run_batch(n)
-            if loop.fc_pending:
-                loop.fc_pending = False
-                _wait_lockstep(loop, self.peer)
+            batch(k, last)
             k = sim.step_index + 1
-            if sim.step_index % every == 0:
-                self._look()
             if sim.step_index == self.check_step:
                 self.checks.extend(first_window_checks(loop, cfg, time.monotonic_ns() - self.t0,
                                                        self.out, None))

@@ -228,13 +228,18 @@ class Simulator:
                 **({"esc": s[Kind.ESC]} if self.esc else {})}
 
     # --- the step ---------------------------------------------------------------------
-    def step(self, pwm_us) -> np.ndarray:
+    def _disturb_before(self) -> int:
+        """The disturbance's switch or ramp due at the next step; returns that step."""
         k = self.step_index + 1
         dist = self.dist
         if k == dist.next_step:
             dist.switch(k)
         elif dist.ramping:
             dist.update(k)
+        return k
+
+    def step(self, pwm_us) -> np.ndarray:
+        k = self._disturb_before()
         if self._scalar_imu:
             flags = self._kstep(pwm_us)        # IMU, GT_ATT, GT_NAV in slots 0..2
             count = flags & 0xFF
@@ -279,12 +284,8 @@ class Simulator:
         Python ends the batch: its _after_step runs here, then the kernel finishes it.
         What Python does before a step (a disturbance switch or ramp) is done here for the
         first step only: the batch stops before the next switch, and ramps step one by one."""
-        k = self.step_index + 1
+        k = self._disturb_before()
         dist = self.dist
-        if k == dist.next_step:
-            dist.switch(k)
-        elif dist.ramping:
-            dist.update(k)
         if dist.ramping:
             n = 1
         elif dist.next_step > k:
