@@ -39,8 +39,10 @@ _SIM_NS_I64 = word_index(Kind.PWM, "sim_ns", 8)
 _WALL_NS_I64 = word_index(Kind.PWM, "wall_ns", 8)
 
 # The most steps one run_batch takes: what its trace buffer is sized for. Between two
-# batches Python looks at the stop request: 64 steps are ~1 ms of wall time.
-BATCH_MAX_STEPS = 64
+# batches Python looks at the stop request: 256 steps are ~4 ms of wall time. A batch
+# costs ~45k instructions of Python, ~700 a step with 64; a GNSS epoch ends a batch every
+# 100 steps anyway (docs/howto/speed.md).
+BATCH_MAX_STEPS = 256
 
 
 @dataclass

@@ -131,6 +131,9 @@ class Fdm:
         """A quiet FGFDMExec with the model loaded at step dt_s."""
         _quiet()
         fdm = jsbsim.FGFDMExec(None)
+        # At its default debug level JSBSim formats messages for the logger several times a step
+        # (about 7000 instructions, 15-20 % of run()); the quiet logger drops them all anyway.
+        fdm.set_debug_level(0)
         fdm.set_aircraft_path(str(AIRCRAFT_DIR))
         fdm.set_dt(dt_s)  # before load_model: lag filters take dt at load
         if not fdm.load_model(model):

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from silbridge.bridge import scenario_schema as S
-from silbridge.bridge import vibration_checks
+from silbridge.bridge import imu_raw, vibration_checks
 from silbridge.bridge.errors import ScenarioError
 from silbridge.magfield import field_at
 from silbridge.shm.records import NS_PER_S
@@ -419,6 +419,7 @@ class _Resolver:
                 self.fail(f"setpoint[{i}].start_s", f"{sp.start_s:g} s is not before the end "
                                                      f"of the run ({sc.duration_s:g} s)")
         vibration_checks.check(sc, self.fail)   # [vibration], [mount], [imu_chip]
+        imu_raw.check(sc, self.fail)            # imu_chip.log_raw
         for i, fp in enumerate(sc.fc_params):
             if fp.at_s >= sc.duration_s:
                 self.fail(f"fc_param[{i}].at_s", f"{fp.at_s:g} s is not before the end "

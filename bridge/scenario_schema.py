@@ -72,7 +72,10 @@ Sensor defaults, with sources:
   - IMU mounting: a 0.5 mm difference in the compression of the anti-vibration
     grommets or foam across the 30.5 mm mounting pattern of a flight controller:
     atan(0.5 / 30.5) = 0.94, taken as 1.0 deg in roll, pitch and yaw. ArduPilot's
-    AHRS_TRIM_X/Y level trim exists to remove this.
+    AHRS_TRIM_X/Y level trim exists to remove this. For scale, the chip's own axes are
+    off by as much: the ICM-42688-P datasheet (DS-000347, Tables 1 and 2) gives a
+    cross-axis sensitivity of +-1.25 % (gyro) and +-1 % (accel), i.e. up to 0.7 and
+    0.6 deg (not modelled apart: the drawn rotation stands for both).
 - ESC telemetry ([esc], bridge/esc_telemetry.py; off unless telemetry_hz is set):
   - kv_rpm_v 920: the 2212 920KV motor jsbsim_models/quadx/motors.xml is built on.
   - winding_ohm 0.134: derived from that file's own figure, the 0.8 ratio of loaded to
@@ -99,21 +102,43 @@ Sensor defaults, with sources:
     smallest difference a magnetic prop balancer check is quoted to catch,
     jakubsafar.cz "Propeller balance": "even 0.05 g") at the blade's centre of mass,
     ~0.4 R = 51 mm of a 10-inch prop: 0.05 x 51 = 2.5 g*mm. At hover that is 0.65 N per
-    rotor, 0.43 m/s^2 on 1.5 kg: the light vibration of a balanced quad (ArduPilot's
-    vibration guidance calls VIBE below 15 m/s^2 good and above 30 a problem). A bent
-    prop (V2) is 5 x that.
+    rotor, 0.43 m/s^2 on 1.5 kg. For scale, ISO 21940-11 (was ISO 1940-1) grade G 6.3,
+    the grade of fans, allows a mass-centre offset e = G / omega = 6.3 mm/s / 855.5
+    rad/s = 7.4 um at full speed: 0.07 to 0.15 g*mm for a 10 to 20 g prop and motor
+    bell. Hobby props balanced by hand sit far above fan grade (2.5 g*mm on 10 to 20 g
+    is G 100 to G 210). A bent prop (V2) is 5 x that, the issue's definition; a tip
+    chipped off (~0.3 g at 120 mm: ~40 g*mm) would be ~15 x.
+  - Frame gain 8: what reaches the FC of a real frame over what the rigid frame passes.
+    A rigid 1.5 kg body answers the forces above with little motion: balanced props,
+    hard mount, hover, the largest axis of ArduPilot's VIBE (the accel's RMS above its
+    5 Hz floor, fc_sil/core/fc_vibe.h) reads 1.2 m/s^2 here (seeds 1-3: 1.32, 1.00,
+    1.21). Real vehicles read about ten times that: ArduPilot's wiki "Measuring
+    Vibration" shows a 3DR IRIS (a quad of this size class) at "normal levels
+    below 15 m/s/s", and a hard-mounted MPU9250 on a quad read +-8 m/s^2 (5.7 m/s^2 RMS)
+    from its motors alone at half throttle, without props (diydrones.com forum,
+    "Vibration analysis"). The gain takes the rigid figure to 10 m/s^2, between the
+    two: 10 / 1.2 = 8.3, rounded to 8. It lumps what the rigid model lacks (the arms'
+    and plates' flexibility, the motor bells' own imbalance and torque ripple) into one
+    frequency-independent factor on every line; the accelerometer and the gyro still
+    read one motion. With it, V2 (bent prop, hard mount) reads VIBE 20 m/s^2 on its
+    largest axis (seeds 1-3: 21.2, 18.2, 20.2), between the wiki's "normal" (below 15)
+    and "may have problems" (above 30); figures: docs/explanation/vibrating-world.md.
+  - Prop wash 0 (off): no published RMS thrust fluctuation of a 10-inch prop in hover
+    was found to cite; the key exists to be set from a log's broadband floor.
   - Blade pass: 2 % of the rotor's thrust at 2/rev. Assumed, no measurement for this
     airframe found: the order of the arm's share of the circle the blade sweeps at
     0.75 R (a 20 mm arm at 95 mm: 3.4 %), which unloads the blade once per pass. Further
     orders 3 and 4 at a quarter of that (0.5 %), so the spectrum shows the 3rd and 4th
     rotor harmonics that gyro spectra of multirotors show; assumed likewise.
-  - Frame mode: none by default (rigid frame); damping 0.05, within the 2-5 % usual
-    for bolted frame structures (V4 places the mode at the blade-pass frequency).
+  - Frame mode: none by default (rigid frame); damping 0.05, assumed (a lightly damped
+    bolted structure; V4 places the mode at the blade-pass frequency).
   - Mount: hard by default (an FC screwed to the frame). Soft: a resonance well below
     the 1x frequency at hover isolates (above sqrt 2 x resonance the gain is < 1):
     30 Hz translational (gain ~0.16 at 81 Hz), 40 Hz rotational (a board on four
     grommets rocks stiffer than it bounces), damping 0.15 (silicone, loss factor ~0.3
-    = 2 zeta). IMU 0.03 m above the CG: the FC on the top plate, at hub height.
+    = 2 zeta): assumed figures, no datasheet of a grommet set found to cite; set them
+    from a measured transmissibility. IMU 0.03 m above the CG: the FC on the top plate,
+    at hub height.
   - IMU chip: TDK ICM-42688-P (DS-000347 v1.7). ODR 8 kHz, the rate PX4's ICM42688P
     driver runs the gyro at; AAF 585 Hz, 2nd order: the chip's reset configuration
     (GYRO_AAF_DELT 13, DELTSQR 170, BITSHIFT 8 in the datasheet's AAF table, 42 to
@@ -253,6 +278,12 @@ SECTIONS = {
                              text="further thrust-ripple orders, whole numbers; 0 = unused"),
         "harmonic_ripple": F("vec4", (0.005, 0.005, 0.0, 0.0), min=0, max=1,
                              unit="fraction of thrust", text="their amplitudes"),
+        "frame_gain": F("float", 8.0, min=0, unit="ratio",
+                        text="the FC's vibration over what a rigid frame transmits, every "
+                        "line (the frame's flexibility, lumped; calibrated to measured VIBE)"),
+        "prop_wash": F("float", 0.0, min=0, max=1, unit="fraction of thrust",
+                       text="broadband thrust fluctuation of each rotor, RMS (prop wash), "
+                       "white above 10 Hz; grows with the throttle; 0 = off"),
         "frame_mode_hz": F("float", 0.0, min=0, unit="Hz",
                            text="frame structural resonance between rotors and IMU; 0 = rigid"),
         "frame_mode_damping": F("float", 0.05, above=0, unit="ratio",
@@ -273,6 +304,8 @@ SECTIONS = {
                     "4000, 8000, 16000 or 32000, a multiple of imu.rate_hz"),
         "aaf_hz": F("float", 585.0, above=0, unit="Hz", text="anti-alias filter 3 dB bandwidth"),
         "aaf_order": F("int", 2, min=0, max=2, text="0: AAF off; 2: on (2nd order)"),
+        "log_raw": F("bool", False, text="log the chip's own samples at odr_hz as /imu_raw "
+                     "(needs vibration.enabled; 1.3 MB of log per s at 32 kHz)"),
     },
     # ESC telemetry (bridge/esc_telemetry.py; derivations in the module docstring). Off unless
     # telemetry_hz is set: no ESC record exists otherwise.

@@ -81,6 +81,9 @@ class Simulator:
         self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4 + esc_slots)
         self._seq = [0] * len(Kind)   # records published per kind; the header seq is this mod 2^32
         self.kernel = self._make_kernel(kernel_cls)
+        # GNSS fixes released by the kernel at their step (kernels with hold(): the C one).
+        self._hold_gnss = hasattr(self.kernel, "hold")
+        self._held_rec = bytearray(64)
         self._attach_kernel()
         self._views = self.buffer._views
         self._prev6 = self._true6()
@@ -223,7 +226,8 @@ class Simulator:
         if not self._scalar_imu:
             imu = s[Kind.IMU]
         return {"imu": imu, "gt_att": att, "gt_nav": nav,
-                "baro": baro, "mag": mag, "gnss": s[Kind.GNSS],
+                "baro": baro, "mag": mag,
+                "gnss": s[Kind.GNSS] - (self.kernel.held if self._hold_gnss else 0),
                 "setpoint": s[Kind.SETPOINT],
                 **({"esc": s[Kind.ESC]} if self.esc else {})}
 
@@ -348,6 +352,8 @@ class Simulator:
             _, _, fix = pending.popleft()
             sb.GNSS.pack_into(buf.buf, count * 64, 4, 0, self._next_seq(4), sim_ns, 0, *fix)
             count += 1
+        if self._hold_gnss:
+            self._hold_pending()
         if self.step_index == self.setpoints.next_step:
             _, s_roll, s_pitch, s_yaw, s_alt, mask = self.setpoints.pop()
             sb.SETPOINT.pack_into(buf.buf, count * 64, 8, 0, self._next_seq(8), sim_ns, 0,
@@ -365,6 +371,19 @@ class Simulator:
             count += n
         self._update_next_slow()
         return count
+
+    def _hold_pending(self) -> None:
+        """The fixes due later go to the kernel, which writes each at its release step: that
+        step then needs no Python (a batch runs on through it). Their sequence numbers are
+        taken now, in release order, as the release would take them. The first fix is
+        released here, ending its batch: the FC's supervisor looks up the declination at
+        the first fix, after the batch that brought it (fc_sil/autoflight.py next_due_ns).
+        Fixes beyond the kernel's room stay here, in order, for a later call or Python."""
+        pending, kernel, rec = self.gnss.pending, self.kernel, self._held_rec
+        while pending and self._seq[Kind.GNSS] and kernel.held < _step.HELD_MAX:
+            due_ns, _, fix = pending.popleft()
+            sb.GNSS.pack_into(rec, 0, 4, 0, self._next_seq(4), 0, 0, *fix)
+            kernel.hold(due_ns, rec)
 
     def _update_next_slow(self) -> None:
         """Tell the kernel the sim time of the next GNSS or setpoint record."""

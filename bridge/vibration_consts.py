@@ -4,7 +4,9 @@ vib_*, chip_*, imu_rot_on, imu_r*); and the chip's AAF gain for Python (tests, d
 
 The models live in C (bridge/src/vibration.h, imu_chip.h); this module only turns the
 scenario's [vibration], [mount] and [imu_chip] tables, the JSBSim model's geometry and
-mass and the vehicle draw (CG offset, IMU misalignment) into those numbers. With
+mass and the vehicle draw (CG offset, IMU misalignment) into those numbers. The stage's
+vib_imbalance*_kg_m and vib_ripple*_frac carry vibration.frame_gain already (effective
+forcing of a rigid frame that shakes the FC as the real frame does). With
 vibration.enabled false and no IMU misalignment every constant is 0 and the stage runs
 the IMU of before. bridge/vibration_checks.py checks the scenario's keys.
 """
@@ -15,6 +17,7 @@ import math
 
 from silbridge.bridge.fdm import ROTOR_HUBS_FRD_M
 from silbridge.bridge.imu import SPIN_CW
+from silbridge.bridge.scenario import draw_rng
 
 _SLUG_FT2_KG_M2 = 1.3558179483314003                     # slug ft^2 -> kg m^2
 _N_RIPPLES = 5                                           # sensor_stage.h SB_VIB_RIPPLES
@@ -32,8 +35,8 @@ def names() -> list[str]:
     out += ["vib_mass_kg", "vib_ixx_kg_m2", "vib_iyy_kg_m2", "vib_izz_kg_m2"]
     out += [f"vib_lever_{a}_m" for a in _AXES]
     out += ["vib_frame_hz", "vib_frame_damping", "vib_mount_hz", "vib_mount_damping",
-            "vib_mount_rot_hz", "vib_mount_rot_damping", "chip_odr_hz", "chip_aaf_hz",
-            "chip_aaf_order"]
+            "vib_mount_rot_hz", "vib_mount_rot_damping", "vib_wash_frac", "vib_wash_seed",
+            "chip_odr_hz", "chip_aaf_hz", "chip_aaf_order"]
     out += ["imu_rot_on"] + [f"imu_r{i}{j}" for i in range(3) for j in range(3)]
     return out
 
@@ -58,7 +61,11 @@ def stage_consts(sc, fdm, vehicle) -> dict:
     vib, mount, chip = sc.vibration, sc.mount, sc.imu_chip
     cg = vehicle.cg_offset_frd_m
     c["vib_on"] = 1.0
-    u_kg_m = vib.imbalance_g_mm * 1e-6               # g*mm -> kg*m
+    # Every stage after the forcing is linear, so the frame's lumped gain (frame_gain: what a
+    # real frame passes to the FC over what the rigid body does) scales the forcing itself:
+    # the accelerometer and the gyro keep reading one motion.
+    gain = vib.frame_gain
+    u_kg_m = vib.imbalance_g_mm * 1e-6 * gain        # g*mm -> kg*m
     for m in range(4):
         hub = ROTOR_HUBS_FRD_M[m]
         for i, a in enumerate(_AXES):
@@ -70,7 +77,7 @@ def stage_consts(sc, fdm, vehicle) -> dict:
     ripples += list(zip(vib.harmonic_orders, vib.harmonic_ripple))
     for h, (order, frac) in enumerate(ripples, start=1):
         c[f"vib_ripple{h}_order"] = float(order)
-        c[f"vib_ripple{h}_frac"] = float(frac) if order > 0 else 0.0
+        c[f"vib_ripple{h}_frac"] = float(frac) * gain if order > 0 else 0.0
     c["vib_mass_kg"] = fdm.mass_kg
     for a in _AXES:
         c[f"vib_i{a}{a}_kg_m2"] = fdm.fdm[f"inertia/i{a}{a}-slugs_ft2"] * _SLUG_FT2_KG_M2
@@ -83,6 +90,11 @@ def stage_consts(sc, fdm, vehicle) -> dict:
     c["vib_mount_damping"] = mount.damping
     c["vib_mount_rot_hz"] = mount.rot_resonance_hz if soft else 0.0
     c["vib_mount_rot_damping"] = mount.rot_damping
+    # Prop wash: the frame gain scales its forcing as it does the lines'; its generator's
+    # seed is the run's own named stream (same seed, same draws; a 53-bit whole number,
+    # exact as a double).
+    c["vib_wash_frac"] = vib.prop_wash * gain
+    c["vib_wash_seed"] = float(draw_rng(sc.seed, "vibration:prop_wash").integers(0, 2 ** 53))
     c["chip_odr_hz"] = float(chip.odr_hz)
     c["chip_aaf_hz"] = chip.aaf_hz
     c["chip_aaf_order"] = float(chip.aaf_order)

@@ -84,7 +84,7 @@ class FlightCore:
         if code == _core.FC_ERR_RANGE:
             raise ParamError(f"{d.name}={v:g} is refused: it contradicts another parameter "
                              "(MOT_PWM_MIN + 100 <= MOT_PWM_MAX, MOT_SPIN_ARM <= MOT_SPIN_MIN < "
-                             "MOT_SPIN_MAX, INS_HNTCH_FREQ > INS_HNTCH_BW / 2); value kept")
+                             "MOT_SPIN_MAX, INS_HNTCH/HNTC2_FREQ > _BW / 2); value kept")
         if code != _core.FC_OK:
             raise ParamError(f"{d.name}={value!r} refused by the core: "
                              f"{_STATUS_TEXT.get(code, code)}; value kept")
@@ -282,6 +282,27 @@ class FlightCore:
         _reports, _rejected, count, rows = self._c.esc_reports()
         return [EscReport(m, *row) for m, row in enumerate(rows[:count]) if row[0] >= 0]
 
+
+    # ---- the in-flight FFT (FFT_* parameters, fc_fft.h; fc_sil/ext/core_fft.c) ----
+
+    def bind_fft_log(self, ftn1, ftn2) -> None:
+        """FTN1/FTN2 rows at 10 Hz into these bytearrays while the FFT runs
+        (tools/logs/ftn_log.py); None, None: off."""
+        self._c.bind_fft_log(ftn1, ftn2)
+
+    def fft_ftn(self) -> tuple[np.ndarray, np.ndarray]:
+        """The FTN1 row and FTN2 rows as they would be logged now."""
+        from .ftn_rows import FTN1_DTYPE, FTN2_DTYPE
+        r1, r2 = self._c.fft_ftn()
+        return np.frombuffer(r1, FTN1_DTYPE), np.frombuffer(r2, FTN2_DTYPE)
+
+    def fft_calibrating(self) -> bool:
+        """FFT_ENABLE is set and the FFT still learns its noise reference (pre-arm)."""
+        return self._c.fft_calibrating()
+
+    def fft_notch_freqs(self, throttle_out: float) -> tuple[float, ...]:
+        """The frequencies [Hz] the harmonic notch's MODE 4 reads now, fundamental first."""
+        return self._c.fft_notch_freqs(float(throttle_out))
 
     # ---- system identification (SID_* parameters, fc_sysid.h) --------------
 

@@ -82,7 +82,7 @@ class CoreParamStore:
                     self.sets_refused += 1
                     return (f"{d.name}={v:g} contradicts another parameter (MOT_PWM_MIN + 100 <= "
                             f"MOT_PWM_MAX, MOT_SPIN_ARM <= MOT_SPIN_MIN < MOT_SPIN_MAX, "
-                            f"INS_HNTCH_FREQ > INS_HNTCH_BW / 2)")
+                            f"INS_HNTCH/HNTC2_FREQ > _BW / 2)")
                 v = self._shadow.get_param(d.index)
             else:
                 self._host[d.name] = v

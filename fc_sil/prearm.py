@@ -7,6 +7,7 @@ for SYS_STATUS's PREARM_CHECK health bit, which MAVSDK reads as "armable".
                     SB_FS_SENS_TO of sim time, and no samples refused lately (NaN/inf)
   AHRS converged  : the estimator has run for ESTIMATOR_SETTLE_S with its accelerometer
                     trust high (the vehicle is still and level enough to have a tilt)
+  FFT             : with FFT_ENABLE, the in-flight FFT has learned its noise reference
   GPS             : modes that need a position have a 3D fix and a fused position estimate
   throttle low    : manual-throttle modes need the throttle stick down; ALT_HOLD-like modes
                     need it no higher than the centre dead zone (else it would climb at once)
@@ -39,6 +40,8 @@ def prearm_failure(v) -> str | None:
         return "PreArm: Compass not healthy"
     if v.imu_run_s < ESTIMATOR_SETTLE_S or v.trust < TRUST_CONVERGED:
         return "PreArm: AHRS not converged"
+    if v.core.fft_calibrating():     # AP_GyroFFT::pre_arm_check: no noise reference yet
+        return "PreArm: FFT calibrating noise"
     if v.mode.requires_position and not v.position_ok():
         return "PreArm: Need 3D Fix"
     fence = v.fence.prearm_failure(v)

@@ -49,6 +49,7 @@ const sb_named_double SB_STAGE_CONST_FIELDS[SB_STAGE_CONST_FIELD_COUNT] = {
     V("vib_frame_damping", frame_damping), V("vib_mount_hz", mount_hz),
     V("vib_mount_damping", mount_damping), V("vib_mount_rot_hz", mount_rot_hz),
     V("vib_mount_rot_damping", mount_rot_damping),
+    V("vib_wash_frac", wash_frac), V("vib_wash_seed", wash_seed),
     {"chip_odr_hz", offsetof(sb_stage_consts, chip.odr_hz)},
     {"chip_aaf_hz", offsetof(sb_stage_consts, chip.aaf_hz)},
     {"chip_aaf_order", offsetof(sb_stage_consts, chip.aaf_order)},
@@ -190,7 +191,7 @@ static void cross(const double a[3], const double b[3], double o[3])
  * at the ODR, plus each vibration line times the AAF's gain at its frequency.
  * af, w: the IMU's "true" signal; bias, noise and clipping follow in sb_imu_scalar. */
 static void chip_read(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t *t,
-                      double af[3], double w[3])
+                      double af[3], double w[3], int64_t sim_ns)
 {
     const sb_stage_consts *c = &s->c;
     const double *r = c->vib.imu_lever_frd_m;
@@ -211,6 +212,8 @@ static void chip_read(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t
         sb_chip_settle(&s->chip, cur);
         s->chip_primed = 1;
     }
+    if (s->raw.rows != NULL)   /* the ODR samples for the log, from copies (imu_raw.h) */
+        sb_imu_raw_step(&s->raw, &s->chip, &s->vib, s->prev6, cur, in->omega_rad_s, sim_ns);
     double y[6];   /* the rigid-body motion, chip_n samples through the AAF at the ODR */
     sb_chip_ramp(&s->chip, s->prev6, cur, y);
     /* the vibration lines through the AAF, read at the step's end (vibration.h: exact) */
@@ -244,7 +247,7 @@ static long write_imu(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t
     double out[6];
     double af[3], w[3];   /* the IMU's true signal: the truth (bytes as before issue 26) */
     if (s->c.vib.on != 0.0) {   /* or, Python zeroing imu.vib_*, what the chip reads */
-        chip_read(s, in, t, af, w);
+        chip_read(s, in, t, af, w, sim_ns);
     } else {
         memcpy(af, t->af, sizeof af);
         memcpy(w, t->w, sizeof w);
@@ -379,6 +382,35 @@ static long write_mag(sb_sensor_stage *s, const sb_fdm_sample *in, sb_record *r,
     return flags;
 }
 
+int sb_sensor_stage_hold(sb_sensor_stage *s, const sb_record *r, int64_t due_ns)
+{
+    sb_held *h = &s->held;
+    if (h->n >= SB_HELD_MAX)
+        return -1;
+    const int i = (h->head + h->n++) % SB_HELD_MAX;
+    h->rec[i] = *r;
+    h->due_ns[i] = due_ns;
+    return 0;
+}
+
+/* The held records due at sim_ns into slots[*slot..]; SB_STAGE_BUFFER_FULL if no room. */
+static long write_held(sb_sensor_stage *s, sb_record *slots, size_t n_slots, size_t *slot,
+                       int64_t sim_ns)
+{
+    sb_held *h = &s->held;
+    while (h->n > 0 && sim_ns >= h->due_ns[h->head]) {
+        if (*slot >= n_slots)
+            return SB_STAGE_BUFFER_FULL;
+        sb_record *r = &slots[(*slot)++];
+        *r = h->rec[h->head];
+        r->h.sim_ns = sim_ns;
+        r->h.flags = 0;
+        h->head = (h->head + 1) % SB_HELD_MAX;
+        h->n--;
+    }
+    return 0;
+}
+
 long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t sim_ns,
                           sb_record *slots, size_t n_slots, size_t first)
 {
@@ -397,7 +429,7 @@ long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t s
     slot += 2;
     leave_state(s->state, in, &t);
     flags |= contact_and_crash(s, in, &t);
-    if (s->baro.on && sim_ns >= s->baro.next_ns) {
+    if (sb_sensor_stage_baro_due(s, sim_ns)) {
         if ((f = write_baro(s, in, &slots[slot++], sim_ns)) < 0)
             return f;
         flags |= f;
@@ -407,6 +439,8 @@ long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t s
             return f;
         flags |= f;
     }
+    if (s->held.n > 0 && (f = write_held(s, slots, n_slots, &slot, sim_ns)) < 0)
+        return f;
     if (sim_ns >= s->next_slow_ns)
         flags |= F_SLOW_DUE;
     else   /* nothing more this step: the last record closes it */

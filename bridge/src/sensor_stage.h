@@ -19,6 +19,7 @@
 #include <stdint.h>
 
 #include "imu_chip.h"
+#include "imu_raw.h"
 #include "sb_records.h"
 #include "step_maths.h"
 #include "vibration.h"
@@ -69,7 +70,7 @@ typedef struct {
 } sb_named_double;
 
 #define SB_FDM_SAMPLE_FIELD_COUNT 22
-#define SB_STAGE_CONST_FIELD_COUNT 75
+#define SB_STAGE_CONST_FIELD_COUNT 77
 extern const sb_named_double SB_FDM_SAMPLE_FIELDS[SB_FDM_SAMPLE_FIELD_COUNT];
 extern const sb_named_double SB_STAGE_CONST_FIELDS[SB_STAGE_CONST_FIELD_COUNT];
 
@@ -119,6 +120,16 @@ typedef struct {
     uint32_t seq;
 } sb_lowrate;
 
+/* Records Python made ahead of their release (a GNSS fix, made at its epoch and released
+ * latency_s later): the stage writes each at the first step at or after its due time,
+ * after the baro and mag, so that step needs no Python (simulator.py _slow_sensors). */
+#define SB_HELD_MAX 8
+typedef struct {
+    sb_record rec[SB_HELD_MAX];   /* sim_ns and flags are the release step's */
+    int64_t due_ns[SB_HELD_MAX];  /* in the order given, which is release order */
+    int head, n;
+} sb_held;
+
 typedef struct {
     sb_stage_consts c;
     double *state;            /* float64[ST_COUNT], the caller's */
@@ -143,6 +154,8 @@ typedef struct {
     int chip_n;               /* chip samples per physics step (ODR x dt) */
     int chip_primed;          /* prev6 and the filter hold a step */
     double prev6[6];
+    sb_imu_raw raw;           /* the chip's ODR samples for the log, when bound (imu_raw.h) */
+    sb_held held;             /* records waiting for their release step */
 } sb_sensor_stage;
 
 /* A defined stage: no noise yet, sensors off, counters at 0. */
@@ -158,10 +171,28 @@ void sb_lowrate_set_noise(sb_lowrate *lr, const double *noise, size_t rows);
 void sb_sensor_stage_set_imu_noise(sb_sensor_stage *s, const double *noise,
                                    const double *temp_c, size_t rows);
 
+/* Hold r until the first step at or after due_ns; -1 when SB_HELD_MAX are held. */
+int sb_sensor_stage_hold(sb_sensor_stage *s, const sb_record *r, int64_t due_ns);
+
 /* The step's records from slots[first] for the FDM sample at sim_ns: F_* flags or'ed with
  * the number of records written, or a negative SB_STAGE_* code. */
 long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t sim_ns,
                           sb_record *slots, size_t n_slots, size_t first);
+
+/* 1 when the baro's sample is due at sim_ns (sb_sensor_stage_step then writes its record). */
+static inline int sb_sensor_stage_baro_due(const sb_sensor_stage *s, int64_t sim_ns)
+{
+    return s->baro.on && sim_ns >= s->baro.next_ns;
+}
+
+/* The offset in sb_fdm_sample of the field the step at sim_ns will not read, or
+ * (size_t)-1: the air temperature is read only for a baro record (1 step in 10), so the
+ * caller may leave it unread (step_run.c: one JSBSim getter call fewer on the others). */
+static inline size_t sb_sensor_stage_optional(const sb_sensor_stage *s, int64_t sim_ns)
+{
+    return sb_sensor_stage_baro_due(s, sim_ns) ? (size_t)-1
+                                                : offsetof(sb_fdm_sample, temperature_r);
+}
 
 /* What a negative return means and what the caller must do. */
 const char *sb_sensor_stage_error(long code);

@@ -18,8 +18,9 @@
  * step with Python work (a disturbance switch, the FC supervisor's and the log's due polls,
  * the start-up checks) is the last of a batch.
  *
- * The FC's poll is called through its bound method: the record router lives in another
- * extension; one vectorcall (~50 ns) a step is not worth a capsule of function pointers.
+ * The FC's poll is called through its bound method's vectorcall entry (step_call.h): the
+ * record router lives in another extension; one vectorcall a step is not worth a capsule
+ * of function pointers.
  * No heap in the step: the buffers are the caller's; the four PWM floats the setters take
  * are rebuilt only when the command changes.
  */
@@ -28,7 +29,7 @@
 void sb_batch_clear(sb_batch *b)
 {
     Py_CLEAR(b->capsule);
-    Py_CLEAR(b->fc_poll);
+    sb_call_clear(&b->fc_poll);
     for (int i = 0; i < 4; i++)
         Py_CLEAR(b->pwm_obj[i]);
     sb_step_release(&b->trace);
@@ -42,7 +43,7 @@ void sb_batch_clear(sb_batch *b)
 int sb_batch_traverse(sb_batch *b, visitproc visit, void *arg)
 {
     Py_VISIT(b->capsule);
-    Py_VISIT(b->fc_poll);
+    Py_VISIT(b->fc_poll.obj);
     return 0;
 }
 
@@ -113,7 +114,7 @@ PyObject *Kernel_bind_lockstep(Kernel *self, PyObject *args, PyObject *kwds)
         return NULL;
     }
     b->capsule = Py_NewRef(cap);
-    b->fc_poll = poll == Py_None ? NULL : Py_NewRef(poll);
+    sb_call_set(&b->fc_poll, poll == Py_None ? NULL : poll);
     b->ls.api = api;
     b->ls.bridge_word = bw;
     b->ls.fc_word = fw;
@@ -142,7 +143,7 @@ static int held_pwm(sb_batch *b, const int64_t *io)
 /* The FC's poll of this step; 0, or -1 with its exception set. */
 static int fc_poll(sb_batch *b, int64_t *io)
 {
-    PyObject *r = PyObject_CallNoArgs(b->fc_poll);
+    PyObject *r = sb_call0(&b->fc_poll);
     if (r == NULL)
         return -1;
     const long n = PyLong_AsLong(r);
@@ -164,7 +165,7 @@ static int finish(Kernel *self, size_t count)
     const int64_t k = self->step_index, sim_ns = k * self->dt_ns;
     sb_lockstep_publish(l, self->slots, count, sim_ns);
     sb_lockstep_after_step(l, self->stage.state, k, sim_ns);
-    if (self->batch.fc_poll == NULL) {
+    if (self->batch.fc_poll.obj == NULL) {
         /* The FC in its own process: the lockstep hand-off (shm/include/sb_handoff.h). Not
          * answered within a slice: the step ends the batch unanswered (io FC_MISSED) and
          * Python looks at the FC, then waits on and collects (bridge_driver.py). */

@@ -143,8 +143,39 @@ static PyObject *Kernel_get_pos(Kernel *self, void *closure)
     return PyLong_FromSize_t(self->stage.imu_pos);
 }
 
+/* hold(due_ns, record): a 64-byte record the stage writes at the first step at or after
+ * due_ns (sensor_stage.h sb_held), so that its release needs no Python. */
+PyObject *Kernel_hold(Kernel *self, PyObject *args)
+{
+    long long due_ns;
+    Py_buffer rec;
+    if (!PyArg_ParseTuple(args, "Ly*", &due_ns, &rec))
+        return NULL;
+    sb_record r;
+    const int ok = rec.len == (Py_ssize_t)sizeof r;
+    if (ok)
+        memcpy(&r, rec.buf, sizeof r);
+    PyBuffer_Release(&rec);
+    if (!ok) {
+        PyErr_Format(PyExc_ValueError, "hold: a record is %zu bytes", sizeof r);
+        return NULL;
+    }
+    if (sb_sensor_stage_hold(&self->stage, &r, due_ns) < 0) {
+        PyErr_Format(PyExc_RuntimeError, "hold: %d records are held already", SB_HELD_MAX);
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
+static PyObject *Kernel_get_held(Kernel *self, void *closure)
+{
+    (void)closure;
+    return PyLong_FromLong(self->stage.held.n);
+}
+
 PyGetSetDef sb_step_getset[] = {
     {"next_slow_ns", (getter)Kernel_get_next_slow, (setter)Kernel_set_next_slow,
      "sim time [ns] from which step flags F_SLOW_DUE", NULL},
     {"pos", (getter)Kernel_get_pos, NULL, "next row of the noise block", NULL},
+    {"held", (getter)Kernel_get_held, NULL, "records held for a later step (hold())", NULL},
     {NULL, NULL, NULL, NULL, NULL}};

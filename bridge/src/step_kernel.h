@@ -16,6 +16,7 @@
 
 #include "sb_records.h"
 #include "sensor_stage.h"
+#include "step_call.h"
 #include "step_lockstep.h"
 
 /* A disturbance force (disturbances.py): f = c * sin(w (t - t_on) + phase), or c. */
@@ -36,7 +37,7 @@ typedef struct {
 typedef struct {
     sb_lockstep ls;           /* the pointers into the views below, for the plain-C side */
     PyObject *capsule;        /* the bridge's segment capsule: keeps the segment alive */
-    PyObject *fc_poll;        /* bound Core.poll_io of the in-process FC */
+    sb_call fc_poll;          /* bound Core.poll_io of the in-process FC (obj NULL: none) */
     PyObject *pwm_obj[4];     /* the held pulse widths as floats, for the setters */
     int64_t pwm_held[4];      /* their values [us]: rebuilt only when they change */
     Py_buffer trace;          /* uint8: step records then PWM records, the hash's order */
@@ -48,11 +49,15 @@ typedef struct {
 
 typedef struct {
     PyObject_HEAD
-    PyObject *setters[4];     /* bound set_double_value of fcs/m1..4-pwm-us */
-    PyObject *run;            /* bound FGFDMExec.run */
+    sb_call setters[4];       /* bound set_double_value of fcs/m1..4-pwm-us */
+    sb_call run;              /* bound FGFDMExec.run */
     /* The FDM sample's getters, in SB_FDM_SAMPLE_FIELDS order (bound by name at init),
      * called from C (docs/howto/speed.md: how the step reaches JSBSim, and why so). */
-    PyObject *getters[SB_FDM_SAMPLE_FIELD_COUNT];
+    sb_call getters[SB_FDM_SAMPLE_FIELD_COUNT];
+    /* The pulse widths last written into JSBSim [us], and whether they were: a held
+     * command is not written again (the properties are JSBSim inputs nothing else sets). */
+    double pwm_written[4];
+    int pwm_written_ok;
     Py_buffer buf_view;       /* the step buffer (bytearray of sb_record slots) */
     Py_buffer state_view;     /* float64[ST_COUNT] */
     Py_buffer block_view;     /* float64 (rows, 6): slow bias + white noise */
@@ -67,6 +72,7 @@ typedef struct {
     force_frame_t forces[2];  /* set_forces(): written before each run() */
     int n_force_frames;
     sb_batch batch;           /* bind_lockstep(): the in-process lockstep batch */
+    Py_buffer raw_view;       /* bind_imu_raw(): the chip's ODR rows (step_raw.c) */
 } Kernel;
 
 /* stepmodule.c */
@@ -97,7 +103,12 @@ PyObject *Kernel_configure_baro(Kernel *self, PyObject *args);
 PyObject *Kernel_configure_mag(Kernel *self, PyObject *args);
 PyObject *Kernel_set_baro_block(Kernel *self, PyObject *arr);
 PyObject *Kernel_set_mag_block(Kernel *self, PyObject *arr);
+PyObject *Kernel_hold(Kernel *self, PyObject *args);
 extern PyGetSetDef sb_step_getset[];
+
+/* step_raw.c: the chip's raw samples for the log (imu_raw.h) */
+PyObject *Kernel_bind_imu_raw(Kernel *self, PyObject *rows);
+PyObject *Kernel_take_imu_raw(Kernel *self, PyObject *unused);
 
 /* step_forces.c: the disturbance forces written into JSBSim before each run() */
 PyObject *Kernel_set_forces(Kernel *self, PyObject *plan);

@@ -9,40 +9,55 @@
  */
 #include "step_kernel.h"
 
-/* The four pulse widths [us] into JSBSim; NaN is refused (a bug upstream, never fly it). */
+/* The four pulse widths [us] into JSBSim; NaN is refused (a bug upstream, never fly it).
+ * A width equal to the one last written is not written again: the properties are inputs
+ * of the model's motor system that nothing else sets, so JSBSim holds the value, and the
+ * held command (PWM at 400 Hz, physics at 1 kHz) skips most of the setter calls. */
 static int write_pwm(Kernel *self, PyObject *const *pwm, int64_t k)
 {
+    double d[4];
     for (int i = 0; i < 4; i++) {
-        double d = PyFloat_AsDouble(pwm[i]);
-        if (d == -1.0 && PyErr_Occurred())
+        d[i] = PyFloat_AsDouble(pwm[i]);
+        if (d[i] == -1.0 && PyErr_Occurred())
             return -1;
-        if (d != d) {
+        if (d[i] != d[i]) {
             PyErr_Format(PyExc_ValueError, "PWM command contains NaN at step %lld: [%R, %R, "
                          "%R, %R]", (long long)k, pwm[0], pwm[1], pwm[2], pwm[3]);
             return -1;
         }
     }
     for (int i = 0; i < 4; i++) {
-        PyObject *r = PyObject_CallOneArg(self->setters[i], pwm[i]);
-        if (r == NULL)
+        if (self->pwm_written_ok && d[i] == self->pwm_written[i])
+            continue;
+        PyObject *r = sb_call1(&self->setters[i], pwm[i]);
+        if (r == NULL) {
+            self->pwm_written_ok = 0;   /* unknown what JSBSim holds now: write all next time */
             return -1;
+        }
         Py_DECREF(r);
+        self->pwm_written[i] = d[i];
     }
+    self->pwm_written_ok = 1;
     return 0;
 }
 
-/* Fill the FDM sample by name: getter i feeds field SB_FDM_SAMPLE_FIELDS[i]. */
-static int read_sample(Kernel *self, sb_fdm_sample *in)
+/* Fill the FDM sample by name: getter i feeds field SB_FDM_SAMPLE_FIELDS[i]. A field the
+ * stage reads only on some steps (sb_sensor_stage_optional) is read on those steps only. */
+static int read_sample(Kernel *self, sb_fdm_sample *in, int64_t sim_ns)
 {
+    const size_t skip = sb_sensor_stage_optional(&self->stage, sim_ns);
     for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++) {
-        PyObject *r = PyObject_CallNoArgs(self->getters[i]);
+        const size_t off = SB_FDM_SAMPLE_FIELDS[i].offset;
+        if (off == skip)
+            continue;
+        PyObject *r = sb_call0(&self->getters[i]);
         if (r == NULL)
             return -1;
-        const double v = PyFloat_AsDouble(r);
+        const double v = sb_call_double(r);
         Py_DECREF(r);
         if (v == -1.0 && PyErr_Occurred())
             return -1;
-        memcpy((char *)in + SB_FDM_SAMPLE_FIELDS[i].offset, &v, sizeof v);
+        memcpy((char *)in + off, &v, sizeof v);
     }
     return 0;
 }
@@ -55,12 +70,12 @@ static int advance_fdm(Kernel *self, PyObject *const *pwm, sb_fdm_sample *in)
         return -1;
     if (self->n_force_frames && sb_step_apply_forces(self, k) < 0)
         return -1;
-    PyObject *r = PyObject_CallNoArgs(self->run);
+    PyObject *r = sb_call0(&self->run);
     if (r == NULL)
         return -1;
     Py_DECREF(r);
     self->step_index = k;
-    return read_sample(self, in);
+    return read_sample(self, in, k * self->dt_ns);
 }
 
 /* Run one step; write the records from slot `first`; return flags. */

@@ -32,20 +32,20 @@ static int Kernel_traverse(Kernel *self, visitproc visit, void *arg)
         for (int i = 0; i < 3; i++)
             Py_VISIT(self->forces[f].set[i]);
     for (int i = 0; i < 4; i++)
-        Py_VISIT(self->setters[i]);
-    Py_VISIT(self->run);
+        Py_VISIT(self->setters[i].obj);
+    Py_VISIT(self->run.obj);
     for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++)
-        Py_VISIT(self->getters[i]);
+        Py_VISIT(self->getters[i].obj);
     return sb_batch_traverse(&self->batch, visit, arg);
 }
 
 static int Kernel_clear(Kernel *self)
 {
     for (int i = 0; i < 4; i++)
-        Py_CLEAR(self->setters[i]);
-    Py_CLEAR(self->run);
+        sb_call_clear(&self->setters[i]);
+    sb_call_clear(&self->run);
     for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++)
-        Py_CLEAR(self->getters[i]);
+        sb_call_clear(&self->getters[i]);
     sb_step_clear_forces(self);
     sb_batch_clear(&self->batch);
     return 0;
@@ -61,6 +61,7 @@ static void Kernel_dealloc(Kernel *self)
     sb_step_release(&self->temps_view);
     sb_step_release(&self->baro_noise);
     sb_step_release(&self->mag_noise);
+    sb_step_release(&self->raw_view);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -145,8 +146,7 @@ static int take_getters(Kernel *self, PyObject *getters)
                          SB_FDM_SAMPLE_FIELDS[i].name);
             return -1;
         }
-        Py_INCREF(f);
-        Py_XSETREF(self->getters[i], f);
+        sb_call_set(&self->getters[i], f);
     }
     return 0;
 }
@@ -203,15 +203,19 @@ static int Kernel_init(Kernel *self, PyObject *args, PyObject *kwds)
         PyErr_SetString(PyExc_ValueError, "dt_ns and flip_steps must be > 0");
         return -1;
     }
-    if (sb_step_take_callables(setters, self->setters, 4, "setters") < 0 ||
-        take_getters(self, getters) < 0)
+    PyObject *set[4] = {NULL, NULL, NULL, NULL};
+    const int taken = sb_step_take_callables(setters, set, 4, "setters");
+    for (int i = 0; i < 4; i++) {
+        sb_call_set(&self->setters[i], set[i]);
+        Py_XDECREF(set[i]);
+    }
+    if (taken < 0 || take_getters(self, getters) < 0)
         return -1;
     if (!PyCallable_Check(run)) {
         PyErr_SetString(PyExc_TypeError, "run must be callable");
         return -1;
     }
-    Py_INCREF(run);
-    Py_XSETREF(self->run, run);
+    sb_call_set(&self->run, run);
     sb_stage_consts c;
     Py_buffer pv;
     if (take_consts(&c, consts) < 0 || take_buffers(self, buf, state) < 0 ||
@@ -278,6 +282,8 @@ static PyMethodDef Kernel_methods[] = {
      "set_baro_block((rows, 1) float64 standard normals)"},
     {"set_mag_block", (PyCFunction)Kernel_set_mag_block, METH_O,
      "set_mag_block((rows, 3) float64 standard normals)"},
+    {"hold", (PyCFunction)Kernel_hold, METH_VARARGS,
+     "hold(due_ns, record): a 64-byte record written at the first step at or after due_ns"},
     {"set_forces", (PyCFunction)Kernel_set_forces, METH_O,
      "set_forces([(setters, [(c_n, w_rad_s, t_on_s, phase_rad, periodic, axis)])]): the "
      "disturbance forces written before each run() (bridge/disturbances.py)"},
@@ -286,6 +292,10 @@ static PyMethodDef Kernel_methods[] = {
      "bind_lockstep(segment, fc_poll, trace, pwm, io, errors, rotor, bridge_word, fc_word): "
      "what "
      "run_batch needs (step_batch.c)"},
+    {"bind_imu_raw", (PyCFunction)Kernel_bind_imu_raw, METH_O,
+     "bind_imu_raw(rows or None): the chip's ODR samples into rows (step_raw.c)"},
+    {"take_imu_raw", (PyCFunction)Kernel_take_imu_raw, METH_NOARGS,
+     "take_imu_raw() -> (rows written since the last take, samples dropped)"},
     {"run_batch", (PyCFunction)Kernel_run_batch, METH_O,
      "run_batch(n) -> steps done: up to n lockstep steps of bridge and in-process FC"},
     {"finish_step", (PyCFunction)Kernel_finish_step, METH_O,
@@ -366,7 +376,7 @@ PyMODINIT_FUNC PyInit__step(void)
         {"ERR_CMD_ROLL", SB_ERR_CMD_ROLL}, {"ERR_CMD_PITCH", SB_ERR_CMD_PITCH},
         {"ERR_CMD_ALT", SB_ERR_CMD_ALT}, {"ERR_HOME_AGL", SB_ERR_HOME_AGL},
         {"ERR_COUNT", SB_ERR_COUNT},
-        {"IO_WORDS", SB_IO_WORDS}};
+        {"IO_WORDS", SB_IO_WORDS}, {"HELD_MAX", SB_HELD_MAX}};
     for (size_t i = 0; i < sizeof ints / sizeof ints[0]; i++)
         if (PyModule_AddIntConstant(m, ints[i].name, ints[i].v) < 0) {
             Py_DECREF(m);

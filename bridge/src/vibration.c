@@ -50,6 +50,7 @@ void sb_vib_init(sb_vibration *v, const sb_vib_consts *c, const double phase_rad
     memset(v, 0, sizeof *v);
     v->c = *c;
     memcpy(v->phase_rad, phase_rad, sizeof v->phase_rad);
+    v->wash.rng = (uint64_t)c->wash_seed;
     for (int i = 0; i < 4; i++) {
         /* U w^2 (cos psi, spin sin psi, 0) = Re(U w^2 (1, -j spin, 0) e^{j psi}):
          * a CCW rotor's heavy side turns from forward toward left */
@@ -110,6 +111,100 @@ static void add_line(const sb_vib_consts *c, const sb_vib_unit *u, double amp, d
     }
 }
 
+/* splitmix64 (Steele, Lea and Flood 2014): a counter through a bijective mix, so the n-th
+ * draw depends only on the seed and n. */
+static uint64_t splitmix64(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* Two standard normal draws (Box-Muller on two uniforms in (0, 1]). */
+static void normal_pair(uint64_t *state, double *n0, double *n1)
+{
+    const double u1 = (double)((splitmix64(state) >> 11) + 1u) * 0x1.0p-53;
+    const double u2 = (double)((splitmix64(state) >> 11) + 1u) * 0x1.0p-53;
+    const double r = sqrt(-2.0 * log(u1));
+    *n0 = r * cos(TWO_PI * u2);
+    *n1 = r * sin(TWO_PI * u2);
+}
+
+/* The 2nd-order low-pass of sb_vib_second_order at a step of dt_s: bilinear, pre-warped so
+ * the natural frequency sits where the continuous one does; f_hz <= 0: off (y = x). */
+static void lp3_init(sb_vib_lp3 *f, double f_hz, double zeta, double dt_s)
+{
+    memset(f, 0, sizeof *f);
+    if (!(f_hz > 0.0))
+        return;
+    const double k = tan(0.5 * TWO_PI * f_hz * dt_s), norm = 1.0 / (1.0 + 2.0 * zeta * k + k * k);
+    f->on = 1;
+    f->b0 = k * k * norm;
+    f->b1 = 2.0 * f->b0;
+    f->b2 = f->b0;
+    f->a1 = 2.0 * (k * k - 1.0) * norm;
+    f->a2 = (1.0 - 2.0 * zeta * k + k * k) * norm;
+}
+
+static void lp3_run(sb_vib_lp3 *f, double x[3])
+{
+    if (!f->on)
+        return;
+    for (int i = 0; i < 3; i++) {
+        const double y = f->b0 * x[i] + f->s1[i];
+        f->s1[i] = f->b1 * x[i] - f->a1 * y + f->s2[i];
+        f->s2[i] = f->b2 * x[i] - f->a2 * y;
+        x[i] = y;
+    }
+}
+
+/* One step of prop wash (vibration.h): four thrust draws, the rigid-frame map, frame mode,
+ * leaky integration, mount; the IMU's acceleration and angular velocity added to out. */
+static void wash_step(sb_vibration *v, const double omega[4], double dt_s, double out[6])
+{
+    const sb_vib_consts *c = &v->c;
+    sb_vib_wash *s = &v->wash;
+    if (s->dt_s != dt_s) {   /* the first step: the filters for this step length */
+        s->dt_s = dt_s;
+        s->leak = exp(-TWO_PI * SB_VIB_WASH_HP_HZ * dt_s);
+        lp3_init(&s->frame_a, c->frame_hz, c->frame_damping, dt_s);
+        lp3_init(&s->frame_al, c->frame_hz, c->frame_damping, dt_s);
+        lp3_init(&s->mount_t, c->mount_hz, c->mount_damping, dt_s);
+        lp3_init(&s->mount_r, c->mount_rot_hz, c->mount_rot_damping, dt_s);
+    }
+    double n[4];   /* always four draws a step, so the stream does not depend on the speeds */
+    normal_pair(&s->rng, &n[0], &n[1]);
+    normal_pair(&s->rng, &n[2], &n[3]);
+    double a[3] = {0.0, 0.0, 0.0}, al[3] = {0.0, 0.0, 0.0};
+    for (int i = 0; i < 4; i++) {
+        const double w = omega[i];
+        if (!(w > 0.0))
+            continue;
+        const double dthrust = c->wash_frac * c->kt_n_s2 * w * w * n[i];   /* [N] */
+        for (int k = 0; k < 3; k++) {
+            a[k] += dthrust * v->ripple[i].p_re[k];
+            al[k] += dthrust * v->ripple[i].al_re[k];
+        }
+    }
+    lp3_run(&s->frame_a, a);
+    lp3_run(&s->frame_al, al);
+    double vel[3], rate[3];
+    for (int k = 0; k < 3; k++) {
+        s->vel[k] = s->leak * s->vel[k] + a[k] * dt_s;
+        s->rate[k] = s->leak * s->rate[k] + al[k] * dt_s;
+        vel[k] = s->vel[k];
+        rate[k] = s->rate[k];
+    }
+    lp3_run(&s->mount_t, vel);
+    lp3_run(&s->mount_r, rate);
+    for (int k = 0; k < 3; k++) {
+        out[k] += (vel[k] - s->vel_prev[k]) / dt_s;
+        out[k + 3] += rate[k];
+        s->vel_prev[k] = vel[k];
+    }
+}
+
 void sb_vib_step(sb_vibration *v, const double omega[4], double dt_s,
                  const sb_imu_chip *chip, double out[6])
 {
@@ -141,4 +236,6 @@ void sb_vib_step(sb_vibration *v, const double omega[4], double dt_s,
             add_line(c, &v->ripple[i], frac * thrust, k * w, zr, zi, hr, hi, out);
         }
     }
+    if (c->wash_frac > 0.0 && dt_s > 0.0)   /* over no time (a read of the lines alone), none */
+        wash_step(v, omega, dt_s, out);
 }

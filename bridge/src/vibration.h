@@ -20,14 +20,30 @@
  * gain and one cos/sin pair. The vibration is a small motion superposed on the FDM's: it
  * never feeds back into JSBSim.
  *
+ * Prop wash (optional, off unless wash_frac > 0): broadband thrust fluctuation of each rotor,
+ * white over the physics band, RMS wash_frac x the rotor's thrust (so it grows with the
+ * throttle), along the thrust axis at the hub. It is not a line, so it runs in the time
+ * domain: the same rigid-frame map gives the IMU's acceleration and the frame's angular
+ * acceleration, the frame mode and the mount are their 2nd-order filters (bilinear), and
+ * both are integrated with one leak (SB_VIB_WASH_HP_HZ) to the IMU's velocity and the
+ * frame's angular velocity: the gyro reads the latter, the accelerometer the change of the
+ * former over the step, so the two agree as the lines do. The draws come from a counter-
+ * based generator (splitmix64) seeded from the scenario's seed: same seed, same bytes.
+ * Not through the chip's AAF (its gain below the physics Nyquist frequency is near 1).
+ *
  * Pure C: no heap, no globals, no OS.
  */
 #ifndef SB_VIBRATION_H
 #define SB_VIBRATION_H
 
+#include <stdint.h>
+
 #include "imu_chip.h"
 
 #define SB_VIB_RIPPLES 5   /* blade pass + four declared orders */
+/* Prop wash's lower band edge [Hz]: below it the motion is the vehicle's own (the FDM and
+ * the FC's loops own it, a few Hz); above it, vibration superposed on the FDM's motion. */
+#define SB_VIB_WASH_HP_HZ 10.0
 
 /* Constants of one run (bridge/vibration_consts.py fills them from the scenario). */
 typedef struct {
@@ -44,7 +60,26 @@ typedef struct {
     double frame_hz, frame_damping;  /* frame structural mode; 0 Hz = rigid frame */
     double mount_hz, mount_damping;  /* mount, translational; 0 Hz = hard */
     double mount_rot_hz, mount_rot_damping;  /* mount, rotational; 0 Hz = hard */
+    double wash_frac;                /* prop wash: RMS thrust fluctuation / thrust; 0 = off */
+    double wash_seed;                /* its generator's seed, a whole number below 2^53 */
 } sb_vib_consts;
+
+/* One 2nd-order low-pass per axis of a 3-vector (transposed direct form II); off: y = x. */
+typedef struct {
+    int on;
+    double b0, b1, b2, a1, a2;
+    double s1[3], s2[3];
+} sb_vib_lp3;
+
+/* Prop wash's state. */
+typedef struct {
+    uint64_t rng;              /* splitmix64 counter */
+    double dt_s;               /* the step the filters below were made for (0: not yet) */
+    double leak;               /* exp(-2 pi SB_VIB_WASH_HP_HZ dt) */
+    sb_vib_lp3 frame_a, frame_al, mount_t, mount_r;
+    double vel[3], rate[3];    /* IMU velocity, frame angular velocity (leaky integrals) */
+    double vel_prev[3];        /* mounted IMU velocity at the previous step */
+} sb_vib_wash;
 
 /* A rotor's forcing per unit amplitude, as it reaches the IMU on a rigid frame: the
  * acceleration at the IMU's place (a + alpha x r_imu) and the angular acceleration.
@@ -59,6 +94,7 @@ typedef struct {
     double phase_rad[4];       /* rotor phases at the end of the last step [rad] */
     sb_vib_unit imbalance[4];  /* per unit of U omega^2, rotating in the rotor plane */
     sb_vib_unit ripple[4];     /* per N of thrust ripple along the thrust axis */
+    sb_vib_wash wash;          /* prop wash (used when c.wash_frac > 0) */
 } sb_vibration;
 
 /* A defined model: phases as given, the geometry's unit responses. */
@@ -67,7 +103,7 @@ void sb_vib_init(sb_vibration *v, const sb_vib_consts *c, const double phase_rad
 /* One physics step of dt_s at rotor speeds omega [rad/s] held over it: advances the rotor
  * phases by omega dt and adds to out (accel xyz [m/s^2], gyro xyz [rad/s], FRD) the
  * vibration the FC reads at the step's end, each line through the chip's AAF at its
- * frequency (chip: the chip whose gain applies). */
+ * frequency (chip: the chip whose gain applies), and the prop wash when it is on. */
 void sb_vib_step(sb_vibration *v, const double omega_rad_s[4], double dt_s,
                  const sb_imu_chip *chip, double out[6]);
 

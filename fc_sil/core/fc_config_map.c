@@ -12,13 +12,33 @@
 #define FC_AHRS_GROUND_KP 2.0f
 #define FC_AHRS_GROUND_KI 1.0f
 
+/* One harmonic notch's parameters, INS_HNTCH_* or INS_HNTC2_* (same shape). */
+static fc_notch_config_t notch_config(int8_t enable, int8_t mode, float freq, float bw, float att,
+                                      int32_t hmncs, float ref, float fm_rat, int16_t opts)
+{
+    fc_notch_config_t n;
+    n.enable = enable != 0;
+    n.mode = (uint8_t)mode;       /* range 0..5 (fc_params.def) */
+    n.options = (uint16_t)opts;   /* range 0..127 */
+    n.harmonics = (uint32_t)hmncs; /* range 0..65535 */
+    n.freq_hz = freq;
+    n.bw_hz = bw;
+    n.att_db = att;
+    n.ref = ref;
+    n.fm_ratio = fm_rat;
+    return n;
+}
+
 static void map_estimation(const fc_params_t *p, fc_core_config_t *cfg)
 {
     cfg->ins.gyro_cutoff_hz = p->ins_gyro_filter;
     cfg->ins.accel_cutoff_hz = p->ins_accel_filter;
-    cfg->ins.notch_enable = p->ins_hntch_enable != 0;
-    cfg->ins.notch_center_hz = p->ins_hntch_freq;
-    cfg->ins.notch_bandwidth_hz = p->ins_hntch_bw;
+    cfg->ins.notch[0] = notch_config(p->ins_hntch_enable, p->ins_hntch_mode, p->ins_hntch_freq,
+                                     p->ins_hntch_bw, p->ins_hntch_att, p->ins_hntch_hmncs,
+                                     p->ins_hntch_ref, p->ins_hntch_fm_rat, p->ins_hntch_opts);
+    cfg->ins.notch[1] = notch_config(p->ins_hntc2_enable, p->ins_hntc2_mode, p->ins_hntc2_freq,
+                                     p->ins_hntc2_bw, p->ins_hntc2_att, p->ins_hntc2_hmncs,
+                                     p->ins_hntc2_ref, p->ins_hntc2_fm_rat, p->ins_hntc2_opts);
 
     fc_mahony_config_t *a = &cfg->ahrs;
     a->kp = p->sb_ahrs_kp;
@@ -165,5 +185,6 @@ bool fc_config_consistent(const fc_params_t *p)
 {
     return p->mot_pwm_min + 100 <= p->mot_pwm_max && p->mot_spin_arm <= p->mot_spin_min
            && p->mot_spin_min < p->mot_spin_max
-           && p->ins_hntch_freq > 0.5f * p->ins_hntch_bw;
+           && p->ins_hntch_freq > 0.5f * p->ins_hntch_bw
+           && p->ins_hntc2_freq > 0.5f * p->ins_hntc2_bw;
 }

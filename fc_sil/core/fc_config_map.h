@@ -39,8 +39,8 @@ void fc_config_map(const fc_params_t *p, fc_core_config_t *cfg);
 int64_t fc_config_pwm_period_ns(const fc_params_t *p);
 
 /* Combinations a single range check cannot see (MOT_PWM_MIN + 100 <=
- * MOT_PWM_MAX, MOT_SPIN_ARM <= MOT_SPIN_MIN < MOT_SPIN_MAX, the notch's
- * bandwidth below twice its centre). */
+ * MOT_PWM_MAX, MOT_SPIN_ARM <= MOT_SPIN_MIN < MOT_SPIN_MAX, each harmonic
+ * notch's bandwidth below twice its centre). */
 bool fc_config_consistent(const fc_params_t *p);
 
 #endif /* FC_CONFIG_MAP_H */

@@ -11,7 +11,9 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "fc_fft_params.h"
 #include "fc_math.h"
+#include "fc_notch_feed.h"
 
 _Static_assert(sizeof(fc_core_status_t) == 248, "fc_core_status_t layout is mirrored in Python");
 
@@ -49,6 +51,7 @@ FC_CTL_SAME_PLACE(pid_ff_us, pid_ff);
 static void map_params(fc_core_t *c)
 {
     fc_config_map(&c->params, &c->cfg);
+    fc_fft_config_from_params(&c->params, &c->fft_cfg);
     c->pwm_period_ns = fc_config_pwm_period_ns(&c->params);
 }
 
@@ -57,12 +60,19 @@ static float pwm_period_s(const fc_core_t *c)
     return (float)c->pwm_period_ns * 1e-9f;
 }
 
+/* The FFT samples the gyro at the IMU rate, or at the rate loop's (FFT_SAMPLE_MODE). */
+static void fft_configure(fc_core_t *c)
+{
+    fc_fft_configure(&c->fft, &c->fft_cfg, 1.0f / c->imu_dt_s, 1.0f / c->cfg.loop_period_s);
+}
+
 void fc_core_apply_params(fc_core_t *c)
 {
     map_params(c);
     (void)fc_ins_configure(&c->ins, &c->cfg.ins, c->imu_dt_s);
     fc_mahony_configure(&c->ahrs, c->ahrs_ground ? &c->cfg.ahrs_ground : &c->cfg.ahrs);
     fc_control_configure(&c->ctl, &c->cfg.ctl, pwm_period_s(c));
+    fft_configure(c);
 }
 
 fc_status_t fc_core_set_param(fc_core_t *c, uint16_t index, float value)
@@ -147,6 +157,7 @@ void fc_core_reset(fc_core_t *c)
     c->gnss = g;
     fc_vibe_init(&c->vibe, FC_VIBE_CLIP_16G_M_S2);
     fc_esc_init(&c->esc);
+    fc_fft_init(&c->fft, &c->fft_cfg, 1.0f / c->imu_dt_s, 1.0f / c->cfg.loop_period_s);
     c->imu_count = 0;
     c->loop_count = 0;
     c->pwm_count = 0;
@@ -201,8 +212,14 @@ fc_status_t fc_core_imu_step(fc_core_t *c, int64_t sim_ns, const float accel_frd
     if (fc_retune_needed(c->imu_dt_s, dt_s)) {
         c->imu_dt_s = dt_s;
         (void)fc_ins_configure(&c->ins, &c->cfg.ins, dt_s);
+        fft_configure(c);
     }
     (void)fc_ins_update(&c->ins, accel_frd_m_s2, gyro_frd_rad_s);
+    /* the FFT hears the raw gyro, or the filtered one (FFT_OPTIONS bit 0), and does a
+     * share of a frame's work per sample */
+    fc_fft_push(&c->fft, (c->fft_cfg.options & FC_FFT_OPT_POST_FILTER) ? c->ins.gyro_frd_rad_s
+                                                                       : gyro_frd_rad_s);
+    fc_fft_step(&c->fft);
     const bool ground = c->in.armed == 0;
     if (ground != c->ahrs_ground) {
         c->ahrs_ground = ground;
@@ -351,6 +368,39 @@ fc_status_t fc_core_esc_step(fc_core_t *c, int64_t sim_ns, unsigned motor, unsig
 
 /* ---- PWM period ---------------------------------------------------------- */
 
+/* Hover learning of FFT_FREQ_HOVER / FFT_BW_HOVER / FFT_THR_REF where ArduCopter learns
+ * MOT_THST_HOVER (Copter::update_throttle_hover): airborne, altitude held (no climb
+ * demanded there; here: within FC_ALT_HOLD_ERR_M of the target), |climb| < 0.6 m/s, roll
+ * and pitch within 5 deg. The learned values become the
+ * parameters on disarm (AP_GyroFFT::save_params_on_disarm). */
+#define FC_FFT_HOVER_CLIMB_M_S 0.6f
+#define FC_FFT_HOVER_TILT_RAD (5.0f * FC_DEG_TO_RAD_F)
+static void fft_supervise(fc_core_t *c, float dt_s)
+{
+    if (!c->fft.active) {
+        return;
+    }
+    if (c->in.armed == 0) {
+        if (c->fft.learned) {
+            c->params.fft_freq_hover = c->fft.freq_hover_hz;
+            c->params.fft_bw_hover = c->fft.bw_hover_hz;
+            c->params.fft_thr_ref = c->fft.thr_ref;
+            c->fft.learned = false;
+        }
+        return;
+    }
+    const fc_core_status_t *s = &c->status;
+    const float range_us = c->cfg.mix.pwm_max_us - c->cfg.mix.pwm_min_us;
+    const float throttle = (c->mixer.throttle_us - c->cfg.mix.pwm_min_us) / range_us;
+    if (c->spool_logic.airborne && c->in.alt_mode == FC_ALT_MODE_ALTITUDE
+        && fabsf(c->in.alt_target_m - c->alt_est.alt_m) < FC_ALT_HOLD_ERR_M && throttle > 0.0f
+        && fabsf(c->alt_est.climb_m_s) < FC_FFT_HOVER_CLIMB_M_S
+        && fabsf(s->euler_est_rad[0]) < FC_FFT_HOVER_TILT_RAD
+        && fabsf(s->euler_est_rad[1]) < FC_FFT_HOVER_TILT_RAD) {
+        fc_fft_update_freq_hover(&c->fft, dt_s, throttle);
+    }
+}
+
 bool fc_core_pwm_due(const fc_core_t *c, int64_t *tick_ns)
 {
     if (!c->have_imu || c->next_pwm_ns > c->last_imu_ns) {
@@ -423,6 +473,8 @@ fc_status_t fc_core_pwm_step(fc_core_t *c, int64_t tick_ns, uint16_t pwm_us[FC_M
     const fc_status_t st = fc_mixer_update(&c->mixer, &c->cfg.mix, c->spool, o->throttle_us,
                                            o->cr_us, o->cp_us, o->cy_us, dt_s, pwm_us);
     fill_status(c, tick_ns, pwm_us);
+    fft_supervise(c, dt_s); /* FFT hover learning (before the notches read the FFT) */
+    fc_notch_feed(c); /* the notches' centres from this tick's throttle and telemetry */
     c->next_pwm_ns = tick_ns + c->pwm_period_ns;
     c->pwm_count++;
     return st;

@@ -43,6 +43,7 @@
 #include "fc_config_map.h"
 #include "fc_control.h"
 #include "fc_esc.h"
+#include "fc_fft.h"
 #include "fc_gnss_aid.h"
 #include "fc_inputs.h"
 #include "fc_ins.h"
@@ -120,6 +121,8 @@ typedef struct fc_core {
     fc_gnss_store_t gnss;
     fc_vibe_t vibe;           /* accel vibration levels and clipping (VIBRATION), per sample */
     fc_esc_t esc;             /* latest ESC telemetry per motor (a store, no control effect) */
+    fc_fft_config_t fft_cfg;  /* the in-flight FFT's configuration (FFT_*, fc_fft_params.c) */
+    fc_fft_t fft;             /* in-flight gyro FFT: a share per IMU sample; feeds notch MODE 4 */
     fc_state_source_t source; /* estimate + ground truth -> state */
     fc_vehicle_state_t state; /* what the controllers read */
 

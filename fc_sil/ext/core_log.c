@@ -32,6 +32,7 @@ void fc_ext_clear_log(CoreObject *self)
     Py_CLEAR(self->log_stage);
     Py_CLEAR(self->log_status);
     Py_CLEAR(self->log_timing);
+    fc_ext_clear_fft_log(self);
     self->log_pwm = 0;
     self->log_on = 0;
 }
@@ -105,7 +106,7 @@ int fc_ext_log_batch(CoreObject *self, const unsigned char *recs, Py_ssize_t n,
         fc_ext_append_bytes(self->log_status, status,
                             k * (Py_ssize_t)sizeof(fc_core_status_t)) < 0)
         return -1;
-    return 0;
+    return fc_ext_log_fft(self); /* FTN1/FTN2 at 10 Hz when bound and the FFT runs */
 }
 
 PyMethodDef fc_ext_log_methods[] = {

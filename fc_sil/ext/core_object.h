@@ -77,6 +77,8 @@ typedef struct CoreObject {
     int log_on;               /* any record queue bound */
     PyObject *log_timing;     /* bytearray: the /timing channel's queue (poll_io rows) */
     fc_io_t io;               /* attach_io(): the shared-memory poll loop in C (record_router.c) */
+    PyObject *log_ftn1, *log_ftn2; /* bind_fft_log(): FTN1/FTN2 rows at 10 Hz (core_fft.c) */
+    int64_t ftn_next_ns;      /* IMU time of the next FTN rows [ns] */
 } CoreObject;
 
 /* core_object.c: construction and clean-up (the type's tp_new and tp_dealloc). */
@@ -117,8 +119,15 @@ extern PyMethodDef fc_ext_sysid_methods[];
  * ESC_TELEMETRY_1_TO_4 carry to ground stations). */
 extern PyMethodDef fc_ext_telem_methods[];
 
+/* core_fft.c: Core methods bind_fft_log, fft_ftn, fft_notch_freqs; the FTN rows appended
+ * after each logged batch (-1 with an exception on failure). */
+extern PyMethodDef fc_ext_fft_methods[];
+int fc_ext_log_fft(CoreObject *self);
+void fc_ext_clear_fft_log(CoreObject *self);
+
 /* core_layout.c and core_bench.c: module functions. */
 extern PyMethodDef fc_ext_layout_functions[];
 extern PyMethodDef fc_ext_bench_functions[];
+extern PyMethodDef fc_ext_fft_bench_functions[]; /* fft_bench.c */
 
 #endif /* FC_CORE_OBJECT_H */

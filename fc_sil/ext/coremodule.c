@@ -11,7 +11,7 @@
 /* The Core's method tables, in the order help(Core) lists them. */
 static PyMethodDef *const method_tables[] = {
     fc_ext_object_methods, fc_ext_batch_methods, fc_ext_log_methods, fc_ext_poll_methods,
-    fc_ext_step_methods,   fc_ext_sysid_methods, fc_ext_telem_methods,
+    fc_ext_step_methods,   fc_ext_sysid_methods, fc_ext_telem_methods, fc_ext_fft_methods,
 };
 
 /* Room for every method and the terminator; core_methods_join() refuses to overflow. */
@@ -60,7 +60,8 @@ PyMODINIT_FUNC PyInit__core(void)
         return NULL;
     }
     if (PyModule_AddFunctions(m, fc_ext_layout_functions) < 0 ||
-        PyModule_AddFunctions(m, fc_ext_bench_functions) < 0) {
+        PyModule_AddFunctions(m, fc_ext_bench_functions) < 0 ||
+        PyModule_AddFunctions(m, fc_ext_fft_bench_functions) < 0) {
         Py_DECREF(m);
         return NULL;
     }

@@ -210,6 +210,9 @@ def test_the_v_scenarios_load_with_vibration_on(name):
 BAD = {
     "unknown key": ({"vibration.wobble": 1.0}, "vibration.wobble"),
     "negative amplitude": ({"vibration.imbalance_g_mm": -1.0}, "vibration.imbalance_g_mm"),
+    "negative frame gain": ({"vibration.frame_gain": -1.0}, "vibration.frame_gain"),
+    "negative prop wash": ({"vibration.prop_wash": -0.01}, "vibration.prop_wash"),
+    "prop wash above the thrust": ({"vibration.prop_wash": 1.5}, "vibration.prop_wash"),
     "negative ripple": ({"vibration.harmonic_ripple": [0.01, -0.1, 0, 0]},
                         "vibration.harmonic_ripple[1]"),
     "mount above Nyquist": ({"mount.resonance_hz": 5000.0}, "mount.resonance_hz"),

@@ -34,7 +34,7 @@ CACHE = ROOT / "build" / "cffi"
 
 # The blocks the tests drive, by header; the headers they include come with them.
 HEADERS = ("fc_filter.h", "fc_ins.h", "fc_mahony.h", "fc_attitude.h", "fc_shaper.h",
-           "fc_rate_pid.h", "fc_trim.h", "fc_blend.h", "fc_mixer.h")
+           "fc_rate_pid.h", "fc_trim.h", "fc_blend.h", "fc_mixer.h", "fc_fft.h")
 
 
 def _core_declaration() -> dict:

@@ -99,16 +99,19 @@ def Notch(center_hz: float, bandwidth_hz: float, sample_hz: float) -> Filter:
 
 
 class InsFrontEnd:
-    """Gyro/accel low-pass filters and the optional gyro notch (fc_ins)."""
+    """Gyro/accel low-pass filters and an optional fixed gyro notch, one harmonic (fc_ins)."""
 
     def __init__(self, sample_hz: float, gyro_cutoff_hz: float = _default("INS_GYRO_FILTER"),
                  accel_cutoff_hz: float = _default("INS_ACCEL_FILTER"), notch: bool = False,
                  notch_hz: float = _default("INS_HNTCH_FREQ"),
                  notch_bw_hz: float = _default("INS_HNTCH_BW")):
         self._s = ffi.new("fc_ins_t *")
+        fixed_notch = dict(enable=bool(notch), mode=lib.FC_NOTCH_MODE_FIXED, harmonics=1,
+                           freq_hz=notch_hz, bw_hz=notch_bw_hz,
+                           att_db=_default("INS_HNTCH_ATT"), fm_ratio=1.0)
         config = ffi.new("fc_ins_config_t *", dict(
             gyro_cutoff_hz=gyro_cutoff_hz, accel_cutoff_hz=accel_cutoff_hz,
-            notch_enable=bool(notch), notch_center_hz=notch_hz, notch_bandwidth_hz=notch_bw_hz))
+            notch=[fixed_notch, dict(enable=False)]))
         self.init_status = lib.fc_ins_init(self._s, config, 1.0 / sample_hz)
 
     def run(self, accel_frd_m_s2, gyro_frd_rad_s):

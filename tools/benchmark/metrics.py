@@ -34,6 +34,10 @@ jitter_p50_ms    99th percentile and median; nominal = the median loop period
                  (reported as loop_period_ms), which is right both in real time
                  (where it is the pacing period) and in lockstep (where the
                  period is whatever the machine takes).
+gyro_noise_dps   Noise: the RMS from 20 Hz to the log's Nyquist frequency of the
+gyro_in_noise_dps FC's filtered gyro, of the sensor IMU, of the D terms and of
+dterm_noise_us   each motor's PWM (tools/benchmark/noise.py says exactly how
+motor_noise_us   and why).
 
 Missing data gives NaN for the metrics that need it. When the log is shorter
 than a window, the window is cut to the log, or (if nothing is left) replaced
@@ -50,6 +54,7 @@ import math
 import numpy as np
 
 from silbridge.tools.benchmark.att_scoring import attitude_scores, roll_pitch_from_quat  # noqa: F401
+from silbridge.tools.benchmark.noise import noise_metrics
 from silbridge.tools.logs.mcap_log import RunLog
 
 NAN = float("nan")
@@ -183,6 +188,7 @@ def compute_metrics(log: RunLog, windows: Windows = Windows()) -> dict:
     out.update(_yaw_metrics(log, yaw))
     out.update(_mixer_metrics(log, analysis))
     out.update(_timing_metrics(log, analysis))
+    out.update(noise_metrics(log, analysis))
     out.update(analysis_start_s=float(analysis[0]), analysis_end_s=float(analysis[1]),
                yaw_start_s=float(yaw[0]), yaw_end_s=float(yaw[1]), log_end_s=float(end_s),
                window_note="; ".join(notes))

@@ -21,6 +21,7 @@ import os
 from pathlib import Path
 
 from silbridge.tools.benchmark.table1 import PAPER, ROWS, _cell, scenario_key
+from silbridge.tools.benchmark.table1_compare import comparison_markdown
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2em auto;
@@ -185,8 +186,13 @@ def render_index(*, table: dict, results, figures: list[tuple[str, str]], rep_di
         "<a href='table1.md'>table1.md</a>, <a href='table1.json'>table1.json</a>.</p>",
         "<h2 id='table1'>Table 1</h2>", table1_html(table),
         "<p class='sub'>p-p: PWM peak to peak; sat: time any motor saturates; RMS/P95: "
-        "attitude error; cp/cr/cy: mixer offsets. n/a: the controller does not report it.</p>",
+        "attitude error; noise rows: RMS over 20-200 Hz of the filtered gyro, the IMU input, "
+        "the D terms and the motor PWM; cp/cr/cy: mixer offsets. n/a: the controller does "
+        "not report it.</p>",
     ]
+    if table.get("comparison"):     # what the page may claim: the paired verdicts, not means
+        parts += ["<h2 id='paired'>Controllers compared, paired by seed</h2>",
+                  f"<pre>{_e(comparison_markdown(table['comparison']))}</pre>"]
     if scenarios:
         parts.append("<h2 id='scenarios'>Scenarios</h2><table class='scen'><tbody>"
                      + "".join(f"<tr><td class='l'><b>{_e(k)}</b></td><td class='l'>{_e(v)}"

@@ -1,9 +1,13 @@
 """Table 1: mean and standard deviation of each metric per scenario, with the
 paper's figures beside ours (Kim et al., Table 1; AirSim, their SIL FC).
 
-JSON shape (fixed by the benchmark issue):
-  {"scenarios": {name: {metric: {"mean": x, "std": s, "n": n}}}, ...}
+JSON shape (fixed by the benchmark issue; "comparison" added when the runs are of several
+controllers, with the medians):
+  {"scenarios": {name: {metric: {"mean": x, "std": s, "n": n}}},
+   "comparison": tools/benchmark/table1_compare.py compare_fcs(), ...}
 Standard deviation is the sample standard deviation (ddof=1), 0 for n = 1.
+Mean +- std is the paper's form; a claim that one controller is at or below another comes
+from the paired comparison printed under the table, never from these means.
 """
 
 from __future__ import annotations
@@ -12,12 +16,18 @@ import math
 
 import numpy as np
 
+from silbridge.tools.benchmark.table1_compare import comparison_markdown, compare_fcs
+
 # (metric key, row label, unit, format)
 ROWS = [
     ("pwm_pp_us", "p-p", "us", "{:.1f}"),
     ("sat_pct", "sat", "%", "{:.2f}"),
     ("att_rms_deg", "RMS", "deg", "{:.3f}"),
     ("att_p95_deg", "P95", "deg", "{:.3f}"),
+    ("gyro_noise_dps", "gyro noise", "deg/s", "{:.3f}"),
+    ("gyro_in_noise_dps", "gyro noise in", "deg/s", "{:.3f}"),
+    ("dterm_noise_us", "D-term noise", "us", "{:.2f}"),
+    ("motor_noise_us", "motor noise", "us", "{:.2f}"),
     ("yaw_rate_rad_s", "yaw rate", "rad/s", "{:.4f}"),
     ("cp_us", "cp", "us", "{:.2f}"),
     ("cr_us", "cr", "us", "{:.2f}"),
@@ -50,7 +60,9 @@ def scenario_key(name: str) -> str:
 
 
 def aggregate(results, group=lambda r: scenario_key(r.spec.scenario)) -> dict:
-    """Results -> {"scenarios": {name: {metric: {mean, std, n}}}}."""
+    """Results -> {"scenarios": {name: {metric: {mean, std, n}}}}, and
+    "comparison" (paired by seed, per scenario) when the results are of ours and at least
+    one other controller (spec.fc)."""
     groups: dict[str, list] = {}
     for r in results:
         groups.setdefault(group(r), []).append(r.metrics)
@@ -68,7 +80,11 @@ def aggregate(results, group=lambda r: scenario_key(r.spec.scenario)) -> dict:
                 "std": float(vals.std(ddof=1)) if n > 1 else (0.0 if n else None),
                 "n": n,
             }
-    return {"scenarios": table}
+    out = {"scenarios": table}
+    comparison = compare_fcs(results, lambda r: scenario_key(r.spec.scenario))
+    if comparison is not None:
+        out["comparison"] = comparison
+    return out
 
 
 def _num(fmt: str, v: float) -> str:
@@ -104,6 +120,8 @@ def markdown(table: dict, *, paper: bool = True, title: str = "Table 1", rows=No
                 v = PAPER[name].get(key)
                 row.append("" if v is None else str(v))
         lines.append("| " + " | ".join(row) + " |")
+    if rows is None and table.get("comparison"):    # under Table 1 itself, not under others
+        lines += ["", comparison_markdown(table["comparison"])]
     return "\n".join(lines)
 
 

@@ -82,12 +82,17 @@ def _print_table(path: str, s: dict, integrity) -> None:
               f" ({ch['segments']} segments of {ch['segment_n']})")
         print(f"    {'axis':<8} {'band RMS':>12}  peaks: freq [Hz] amplitude (harmonic)")
         for axis, v in ch["axes"].items():
-            peaks = "  ".join(f"{p['freq_hz']:.1f} {p['amp']:.3g}"
-                              + (f" ({p['harmonic']}x)" if p["harmonic"] else "")
-                              for p in v["peaks"]) or "none above the floor"
+            peaks = "  ".join(_peak_cell(p) for p in v["peaks"]) or "none above the floor"
             print(f"    {axis:<8} {v['band_rms']:>8.3g} {v['unit']:<5} {peaks}")
         if "track" in ch:
             _print_track(ch)
+
+
+def _peak_cell(p: dict) -> str:
+    """freq amp, then (kx) at a rotor harmonic or (alias of F) where the chip shows it."""
+    label = (f" ({p['harmonic']}x)" if p["harmonic"] else
+             f" (alias of {p['alias_of_hz']:.1f})" if p.get("alias_of_hz") else "")
+    return f"{p['freq_hz']:.1f} {p['amp']:.3g}{label}"
 
 
 def _print_track(ch: dict) -> None:

@@ -1,13 +1,16 @@
-"""`silbridge tune`: frequency responses, stability margins, step responses and
-an automatic gain search, on the same C core the benchmark flies.
+"""`silbridge tune`: frequency responses, stability margins, step responses, an
+automatic gain search and the harmonic notch setup, on the same C core the benchmark
+flies.
 
     silbridge tune sysid --axis roll[,pitch,yaw] [--inject output|input|both]
     silbridge tune step  --axis roll[,pitch,yaw]
     silbridge tune auto  --axis roll,pitch --out DIR [--trials N] [--compare FILE.parm]
     silbridge tune anchor --axis roll,pitch [--ours FILE.parm]
+    silbridge tune notch [LOG] [--scenario V2]
 
 Every form takes --json (one JSON object on stdout) and writes its report
-(index.html, report.md, PNG figures, summary.json) to --out.
+(index.html, report.md, PNG figures, summary.json; notch: notch.parm, the two logs and
+summary.json) to --out.
 """
 
 from __future__ import annotations
@@ -20,7 +23,9 @@ from pathlib import Path
 from silbridge.tools.cli.aliases import add_deprecated_alias
 from silbridge.tools.tune import tune_defaults as D
 
-HELP = "identify and tune the attitude loops: sweeps, margins, steps, autotune"
+HELP = "identify and tune the attitude loops: sweeps, margins, steps, autotune, notch"
+# tune notch without a log: the scenario with a vibration problem (V2, a bent prop)
+NOTCH_SCENARIO = "V2"
 
 
 def _common(p, default_out: str) -> None:
@@ -100,6 +105,37 @@ def add_arguments(p) -> None:
                    help="our tuned .parm (tune auto) for a third column")
     n.add_argument("--aggr", type=float, default=D.AUTOTUNE_AGGR,
                    help="AUTOTUNE_AGGR (default %(default)g)")
+    _add_notch(sub)
+
+
+def _add_notch(sub) -> None:
+    n = sub.add_parser("notch", help="harmonic notch and gyro filter from a hover's gyro "
+                                     "spectrum; write a .parm, fly it, compare the noise")
+    n.add_argument("log", nargs="?", default=None, metavar="LOG",
+                   help="a `silbridge fly --log` hover; without it, fly --scenario first")
+    n.add_argument("--scenario", default=NOTCH_SCENARIO,
+                   help="scenario of the fresh hover without LOG (default %(default)s)")
+    n.add_argument("--seed", type=int, default=1, help="its seed (default %(default)s)")
+    n.add_argument("--duration", type=float, default=None,
+                   help="its simulated seconds (default: the scenario's)")
+    n.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="FC parameter for the flights this run makes (repeatable; applied "
+                        "after --params; with LOG, the one after the proposal)")
+    n.add_argument("--params", dest="param_file", default=None, metavar="FILE",
+                   help="ArduPilot .parm file for the flights this run makes (read only)")
+    n.add_argument("--mode", type=int, choices=(1, 3), default=None,
+                   help="INS_HNTCH_MODE: 1 throttle, 3 ESC telemetry (default: 3 when the "
+                        "log has ESC telemetry, else 1)")
+    n.add_argument("--window", nargs=2, type=float, default=None, metavar=("A_S", "B_S"),
+                   help="hover window in s of sim time (default: the scenario's steady "
+                        "part, at most the log's second half)")
+    n.add_argument("--crossover-hz", type=float, default=None, metavar="HZ",
+                   help="also report the gyro filters' phase lag at this frequency (the "
+                        "crossover `tune sysid` measured)")
+    n.add_argument("--out", default="tune-out/notch",
+                   help="folder for notch.parm, the logs and summary.json "
+                        "(default %(default)s)")
+    n.add_argument("--json", action="store_true", help="print one JSON object")
 
 
 class TuneArgsError(Exception):
@@ -141,6 +177,9 @@ def run(args) -> int:
     from silbridge.tools.benchmark.campaign import check_executor
     from silbridge.tools.tune.tune_exec import TaskPool
 
+    if args.action == "notch":          # numpy only, no axes, no pool
+        return _run_notch(args)
+
     _need(("scipy", "matplotlib") + (("optuna", "tqdm") if args.action == "auto" else ()))
     check_executor(args.executor, args.jobs, args.ray_address)
     axes = _axes(args.axis)
@@ -166,6 +205,15 @@ def run(args) -> int:
         else:
             from silbridge.tools.tune.tune_cmds import run_auto_cmd
             result = run_auto_cmd(args, axes, base, out_dir, pool, say)
+    if args.json:
+        print(json.dumps(_clean(result)))
+    return 0
+
+
+def _run_notch(args) -> int:
+    from silbridge.tools.tune.tune_notch_cmd import run_notch
+    say = (lambda s: print(s, file=sys.stderr)) if args.json else print
+    result = run_notch(args, _base_params(args), Path(args.out), say)
     if args.json:
         print(json.dumps(_clean(result)))
     return 0

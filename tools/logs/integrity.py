@@ -44,6 +44,7 @@ RATE_KEYS = {
     "/gt_att": ("gt_hz", "physics_hz"),
     "/gt_nav": ("gt_hz", "physics_hz"),
     "/rotor": ("rotor_hz",),     # only a log that declares it (tools/logs/rotor_log.py)
+    "/imu_raw": ("imu_raw_hz",),  # likewise (tools/logs/imu_raw_log.py)
     "/pwm": ("pwm_hz",),
     "/fc/status": ("pwm_hz",),
 }

@@ -171,6 +171,11 @@ class LogWriter:
         if channel not in self._streams:
             self._open(channel, np.dtype(dtype))
 
+    def queue(self, channel: str) -> bytearray:
+        """A declared channel's byte queue, for a C producer appending whole rows of its
+        dtype (cut into batches like the captured channels)."""
+        return self._streams[channel].pending
+
     def write(self, channel: str, arr: np.ndarray) -> None:
         """Append rows (a 1-D structured array) to a channel; the rows are copied.
 

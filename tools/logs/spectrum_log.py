@@ -18,11 +18,11 @@ import dataclasses
 
 import numpy as np
 
+from silbridge.tools.logs.imu_raw_log import RAW_IMU_CHANNEL
 from silbridge.tools.logs.rotor_log import ROTOR_CHANNEL
 from silbridge.tools.logs.spectrum import Spectrum, welch
 
 IMU_CHANNEL = "/imu"
-RAW_IMU_CHANNEL = "/imu_raw"
 # sensor -> (column, unit); axes are body FRD.
 SENSORS = {"gyro": ("gyro_frd_rad_s", "rad/s"), "accel": ("accel_frd_m_s2", "m/s^2")}
 AXES = "xyz"

@@ -12,7 +12,9 @@ JSON, and the HTML report quotes. Shape:
 
 `harmonic` is k when the peak sits at k x the rotor frequency (tools/logs/spectrum_peaks.py
 says within what), `order` the peak's frequency over the rotor's; both null without rotor
-speed. `band_rms` is the RMS from min_hz to Nyquist, in the sensor's unit. With track
+speed. With the chip's raw channel in the log, the FC channel's peaks also carry
+`alias_of_hz`: the true frequency of the raw peak above the FC's Nyquist that folds onto
+them, or null (tools/logs/spectrum_alias.py). `band_rms` is the RMS from min_hz to Nyquist, in the sensor's unit. With track
 (throttle changes): each channel gains "track": {"segment_s", "resolution_hz", "segments",
 "rotor_hz_range"} and each axis "track": [{"k", "segments", "found", "median_dev_pct",
 "max_dev_pct"}] for k = 1, 2, 3 (tools/logs/spectrum_track.py).
@@ -21,6 +23,7 @@ speed. `band_rms` is the RMS from min_hz to Nyquist, in the sensor's unit. With 
 from __future__ import annotations
 
 from silbridge.tools.logs.spectrum import OVERLAP, band_rms
+from silbridge.tools.logs.spectrum_alias import mark_aliases
 from silbridge.tools.logs.spectrum_log import (AXES, NO_ROTOR, ROTOR_CHANNEL, SENSORS,
                                                SpectrumError, channel_rows, channel_spectra,
                                                imu_channels, rotor_ref, rotor_series)
@@ -99,4 +102,5 @@ def vibration_summary(log, window: tuple[float, float, str], segment_s: float,
             for axis, rows in per_axis.items():
                 entry["axes"][axis]["track"] = rows
         out["channels"].append(entry)
+    mark_aliases(out["channels"])
     return out

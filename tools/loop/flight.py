@@ -284,6 +284,8 @@ def fly_two_processes(opts: FlightOptions, out=print, sink=None) -> dict:
                 os.path.join(tempfile.gettempdir(), f"{name}.meta.json")
             meta = run_metadata(opts, sc, sim, cfg, None)
             spool = _rotor_spool(opts, sim) if sink is None else None
+            if sc.imu_chip.log_raw:     # the FC process writes the log: no chip rows there
+                out("note: imu_chip.log_raw: /imu_raw is logged by --processes 1 only")
             # /rotor's rate is not declared here: the bridge appends the spooled rows only
             # to a log the FC finished, so a killed run's log would miss a declared channel.
             if spool is not None:

@@ -11,6 +11,9 @@ as the bridge received them; FC status and per-cycle timing from the FC side.
 
 from __future__ import annotations
 
+from silbridge.bridge import imu_raw
+from silbridge.tools.logs.imu_raw_log import ImuRawLog, rows_per_step
+from silbridge.tools.logs.imu_raw_log import declare_rate as declare_raw_rate
 from silbridge.tools.logs.mcap_log import TIMING_DTYPE, LogWriter
 from silbridge.tools.logs.rotor_log import RotorLog, declare_rate
 
@@ -36,6 +39,13 @@ class RunLogSink:
         # The bridge's per-step hook rotor(sim_ns) writing /rotor when this process also
         # steps the physics (rotor_rad_s: Simulator.rotor_rad_s; tools/logs/rotor_log.py).
         self.rotor = None if rotor_rad_s is None else RotorLog(self.writer, rotor_rad_s)
+        self.imu_raw = None     # attach_imu_raw(): the chip's samples ride on the rotor hook
+
+    def attach_imu_raw(self, sim) -> None:
+        """Log the chip's ODR samples (/imu_raw, tools/logs/imu_raw_log.py) after each step
+        this process's simulator takes; needs the rotor hook (rotor_rad_s given)."""
+        self.imu_raw = ImuRawLog(self.writer, sim.kernel, rows_per_step(sim), self.rotor)
+        self.rotor = self.imu_raw
 
     def capture_fc(self, core_c, timing: bool = False):
         """Let the FC's C core append what it consumes straight into the log's queues
@@ -45,12 +55,15 @@ class RunLogSink:
         loop uses this instead of fc_batch when the sink offers it: no Python work per
         record."""
         from silbridge.fc_sil.status import STATUS_DTYPE
+        from silbridge.tools.logs.ftn_log import bind_ftn
         writer = self.writer
 
         def bind():
             queues, stage, status, tm = writer.capture_targets(STATUS_DTYPE)
             core_c.bind_log(queues, stage=stage, status=status, log_pwm=self._fc_logs_pwm,
                             timing=tm if timing else None)
+            # FTN1/FTN2 from the in-flight FFT (bind_log unbinds them): only with FFT_ENABLE
+            bind_ftn(writer, core_c, core_c.get_param("FFT_ENABLE") != 0)
         bind()
         writer.set_capture_rebind(bind)
         self._unbind = lambda: core_c.bind_log(None)
@@ -78,6 +91,9 @@ class RunLogSink:
         if self._unbind is not None:    # the core must not append to a closed log
             self._unbind()
             self._unbind = None
+        if self.imu_raw is not None:    # nor the kernel write rows nobody takes
+            self.imu_raw.close()
+            self.imu_raw = None
         try:
             self.writer.close(**summary)
         finally:
@@ -98,10 +114,16 @@ def open_run_sink(path, metadata: dict, *, viz_hz: float | None = None, live: st
         out(f"live view: {view.url} (Foxglove: Open connection -> Foxglove WebSocket)")
     kw = {} if viz_hz is None else {"viz_hz": viz_hz}
     try:
+        raw = sim is not None and imu_raw.requested(sim.scenario)
         if sim is not None:     # the physics runs here: log its rotor speeds per step
             kw["rotor_rad_s"] = sim.rotor_rad_s
             metadata = declare_rate(dict(metadata), 1e9 / sim.dt_ns)
-        return RunLogSink(path, metadata=metadata, fc_logs_pwm=True, live=view, **kw)
+            if raw:             # and, asked for, the chip's samples at its data rate
+                metadata = declare_raw_rate(metadata, sim.scenario.imu_chip.odr_hz)
+        sink = RunLogSink(path, metadata=metadata, fc_logs_pwm=True, live=view, **kw)
+        if raw:
+            sink.attach_imu_raw(sim)
+        return sink
     except BaseException:
         if view is not None:
             view.close()

@@ -20,9 +20,8 @@ from silbridge.tools.benchmark.nav.plans import PLANS, Plan
 from silbridge.tools.benchmark.nav.scoring import (Track, score_goto, score_mission,
                                                    score_velocity, yaw_from_quat)
 from silbridge.tools.benchmark.nav.scripts import Flight
+from silbridge.tools.benchmark.table1_compare import FC_LABELS  # noqa: F401 (declared there)
 from silbridge.tools.logs.log_format import LogError
-
-FC_LABELS = {"ours": "ours", "ardupilot": "ArduCopter", "px4": "PX4"}
 
 
 @dataclass
