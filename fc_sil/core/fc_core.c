@@ -390,8 +390,7 @@ static void fft_supervise(fc_core_t *c, float dt_s)
         return;
     }
     const fc_core_status_t *s = &c->status;
-    const float range_us = c->cfg.mix.pwm_max_us - c->cfg.mix.pwm_min_us;
-    const float throttle = (c->mixer.throttle_us - c->cfg.mix.pwm_min_us) / range_us;
+    const float throttle = fc_mixer_throttle_out(&c->mixer, &c->cfg.mix);
     if (c->spool_logic.airborne && c->in.alt_mode == FC_ALT_MODE_ALTITUDE
         && fabsf(c->in.alt_target_m - c->alt_est.alt_m) < FC_ALT_HOLD_ERR_M && throttle > 0.0f
         && fabsf(c->alt_est.climb_m_s) < FC_FFT_HOVER_CLIMB_M_S

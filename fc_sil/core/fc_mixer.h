@@ -69,4 +69,13 @@ fc_status_t fc_mixer_update(fc_mixer_t *m, const fc_mixer_config_t *cfg, int spo
                             float throttle_us, float roll_us, float pitch_us, float yaw_us,
                             float dt_s, uint16_t pwm_out_us[FC_MIXER_MOTORS]);
 
+/* ArduCopter's motors->get_throttle_out(): the throttle the mixer applied, as a fraction of
+ * the PWM range (the unit of MOT_THST_HOVER). The notch's MODE 1 and the FFT's hover learning
+ * both read it. */
+static inline float fc_mixer_throttle_out(const fc_mixer_t *m, const fc_mixer_config_t *cfg)
+{
+    const float range_us = cfg->pwm_max_us - cfg->pwm_min_us;
+    return (range_us > 0.0f) ? (m->throttle_us - cfg->pwm_min_us) / range_us : 0.0f;
+}
+
 #endif /* FC_MIXER_H */

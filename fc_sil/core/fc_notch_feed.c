@@ -60,12 +60,7 @@ void fc_notch_feed(fc_core_t *c)
         return;
     }
     fc_notch_inputs_t in;
-    /* ArduCopter's motors->get_throttle_out(): the throttle the mixer applied,
-     * here as a fraction of the PWM range (the unit of MOT_THST_HOVER). */
-    const float range_us = c->cfg.mix.pwm_max_us - c->cfg.mix.pwm_min_us;
-    in.throttle = (range_us > 0.0f)
-                      ? (c->mixer.throttle_us - c->cfg.mix.pwm_min_us) / range_us
-                      : 0.0f;
+    in.throttle = fc_mixer_throttle_out(&c->mixer, &c->cfg.mix);
     in.motors_stopped = c->spool == FC_SPOOL_SHUT_DOWN;
     esc_inputs(&c->esc, c->last_imu_ns, &in);
     fft_inputs(c, &in);
