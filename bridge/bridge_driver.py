@@ -78,6 +78,7 @@ class BridgeResult:
     interrupted: str | None = None  # "SIGINT"/"SIGTERM" when a signal stopped the run early
     rates: dict = field(default_factory=dict)   # rates_summary(): achieved, late, degraded
     steps_in_c: int = 0    # steps run in C batches with the in-process FC (the rest per step)
+    link: dict = field(default_factory=dict)    # link faults' records delayed / dropped
 
 
 class _NeverStop:
@@ -247,9 +248,18 @@ class _Flight:
         (fc.python_due), the first window's checks, the duration. A stop is seen between
         batches (at most BATCH_MAX_STEPS steps, ~1 ms); a crash is flagged by the kernel, so
         it ends its batch and the run at the crashing step."""
-        loop = self.loop
+        loop, sim, fc_poll = self.loop, self.loop.sim, self.fc_poll
+
+        def answer() -> None:
+            fc_poll()
+            loop.collect_pwm()
+            if loop.seg.word(ls.FC_SIM_NS) < sim.sim_ns:
+                raise PeerLost("the in-process FC did not answer a lockstep step")
 
         def batch(k, last) -> None:
+            if loop.in_python_next():       # a link fault (bridge/link_faults.py)
+                loop.step_one(answer)
+                return
             self.steps_in_c += loop.run_batch(self._batch_len(k, last, fc))
             fc.after_c_polls(*loop.batch_polls())
         self._fly_batches(batch)
@@ -263,6 +273,11 @@ class _Flight:
         loop, sim, every = self.loop, self.loop.sim, self.watch_every
 
         def batch(k, last) -> None:
+            if loop.in_python_next():       # a link fault (bridge/link_faults.py)
+                loop.step_one(lambda: _wait_lockstep(loop, self.peer))
+                if sim.step_index % every == 0:
+                    self._look()
+                return
             n = min(BATCH_MAX_STEPS, last - k + 1, every - (k - 1) % every)
             if k <= self.check_step:
                 n = min(n, self.check_step - k + 1)
@@ -473,4 +488,4 @@ def _result(loop: BridgeLoop, cfg: BridgeRunConfig, checks, wall_ns: int, pacer)
         attitude_rms_deg=loop.attitude_rms_deg(), altitude_rms_m=loop.altitude_rms_m(),
         trace_hash=loop.trace_hash(), crashed=bool(sim.crashed),
         late_steps=pacer.late_steps if pacer else 0,
-        max_late_us=pacer.max_late_ns / 1e3 if pacer else 0.0)
+        max_late_us=pacer.max_late_ns / 1e3 if pacer else 0.0, link=loop.link.counts())

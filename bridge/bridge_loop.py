@@ -22,10 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from silbridge.shm import lockstep as ls
-from silbridge.shm.records import PWM_DTYPE, RECORD_DTYPE, Kind, word_index
+from silbridge.shm.records import KIND_PWM, PWM_DTYPE, RECORD_DTYPE, Kind, word_index
 
 from . import _step
 from .errors import PeerLost
+from .fault_records import FaultRecords
+from .link_faults import PWM_COMMAND, LinkFaults
 
 _NS = 1_000_000_000
 
@@ -37,6 +39,7 @@ _PWM_US_U16 = word_index(Kind.PWM, "pwm_us", 2)
 _ARMED_BYTE = word_index(Kind.PWM, "armed", 1)
 _SIM_NS_I64 = word_index(Kind.PWM, "sim_ns", 8)
 _WALL_NS_I64 = word_index(Kind.PWM, "wall_ns", 8)
+_KIND_U16 = word_index(Kind.NONE, "kind", 2)
 
 # The most steps one run_batch takes: what its trace buffer is sized for. Between two
 # batches Python looks at the stop request: 256 steps are ~4 ms of wall time. A batch
@@ -102,6 +105,13 @@ class BridgeLoop:
         self._pwm_raw = raw
         self._pwm_u16 = raw.cast("H")
         self._pwm_i64 = raw.cast("q")
+        # Faults of the link itself (bridge/link_faults.py): while `link.engaged` the records
+        # pass through it and the steps run one by one (in_python_next, step_one).
+        self.link = LinkFaults(sim.scenario.seed,
+                               on_event=lambda ns, text: sim.events.append((ns, text)))
+        sim.faults.register("link", self.link)
+        # The FC's FAULT records, collected beside its PWM (bridge/fault_records.py).
+        self.fault_records = FaultRecords(sim)
 
     # -- one step ---------------------------------------------------------
     def publish_step(self) -> np.ndarray:
@@ -115,10 +125,12 @@ class BridgeLoop:
         sim = self.sim
         if self._trace:
             self._hash_update(recs)
+        sim_ns = sim.sim_ns
+        if self.link.sensors_engaged:   # hashed above: what the simulator made, not what arrives
+            recs = self.link.sensors_out(recs, sim_ns)
         # A refused push (non-overwriting ring, full) is counted by the ring as
         # rejected and reported by the start-up checks and the summary.
         self._push(recs)
-        sim_ns = sim.sim_ns
         self._set_word(ls.BRIDGE_SIM_NS, sim_ns)
         if self._log_rotor is not None:
             self._log_rotor(sim_ns)
@@ -137,14 +149,22 @@ class BridgeLoop:
     def collect_pwm(self) -> int:
         """Drain the actuator ring; hold the newest command. Returns records read."""
         n = self._pop_pwm(self._pwm_buf)
+        if n and (self._pwm_u16[_KIND_U16] != KIND_PWM or n > 1 and self._others_among(n)):
+            n = self._set_others_aside(n)
+        if self.link.pwm_engaged:
+            self._hold_through_link(n)
+        elif n:
+            last = n - 1
+            # Header and payload fields through memoryviews: Python ints, no numpy scalars.
+            u16 = self._pwm_u16
+            b = last * _SLOT_U16 + _PWM_US_U16       # pwm_us[0..3]: the four motors
+            self.pwm_us = (u16[b], u16[b + 1], u16[b + 2], u16[b + 3])
+            self.armed = bool(self._pwm_raw[last * _SLOT_BYTES + _ARMED_BYTE])
         if n == 0:
             return 0
+        # Counted, logged and hashed as the FC sent them, whatever the link does to them.
         last = n - 1
-        # Header and payload fields through memoryviews: Python ints, no numpy scalars.
-        u16, i64 = self._pwm_u16, self._pwm_i64
-        b = last * _SLOT_U16 + _PWM_US_U16       # pwm_us[0..3]: the four motors
-        self.pwm_us = (u16[b], u16[b + 1], u16[b + 2], u16[b + 3])
-        self.armed = bool(self._pwm_raw[last * _SLOT_BYTES + _ARMED_BYTE])
+        i64 = self._pwm_i64
         st = self.stats
         if st.pwm_first_sim_ns < 0:
             st.pwm_first_sim_ns = i64[_SIM_NS_I64]
@@ -162,6 +182,33 @@ class BridgeLoop:
                 i64[i * _SLOT_I64 + _WALL_NS_I64] = 0
             self._hash_update(self._pwm_raw[:n * _SLOT_BYTES])
         return n
+
+    def _others_among(self, n: int) -> bool:
+        """Whether the n records popped hold another kind than PWM (one compare when n == 1)."""
+        u16 = self._pwm_u16
+        return any(u16[i * _SLOT_U16 + _KIND_U16] != KIND_PWM for i in range(n))
+
+    def _set_others_aside(self, n: int) -> int:
+        """A collection with other records than PWM (the FC's FAULTs): those are routed to
+        the fault engine, the PWM records moved to the front; returns how many PWM. As the C
+        collection does (step_lockstep.c), so the trace holds the PWM alone either way."""
+        recs = self._pwm_buf[:n]
+        is_pwm = recs["kind"] == KIND_PWM
+        self.fault_records.route(recs.copy())
+        m = int(is_pwm.sum())
+        self._pwm_buf[:m] = recs[is_pwm]
+        return m
+
+    def _hold_through_link(self, n: int) -> None:
+        """While the link is faulty: the motors take the newest of the n records popped (and
+        of earlier ones in flight) that the link lets arrive by now; else they hold their
+        command, as an ESC keeps its last pulse."""
+        rec = self.link.pwm_in(self._pwm_buf[:n], self.sim.sim_ns)
+        if rec is not None:
+            us0, us1, us2, us3, _, _, _, _, armed = PWM_COMMAND.unpack_from(rec)
+            self.pwm_us = (us0, us1, us2, us3)
+            self.armed = bool(armed)
+            self._io_stale = True
 
     # -- many steps: bridge and in-process FC in C -----------------------------
     def bind_in_process_fc(self, fc_poll_c) -> bool:
@@ -227,6 +274,10 @@ class BridgeLoop:
         used = w[_step.IO_TRACE_BYTES]
         if used and self._trace:
             self._hash_update(self._trace_mv[:used])
+        if w[_step.IO_OTHER_N]:     # the FC's FAULT records, routed before the next step
+            at = w[_step.IO_OTHER_AT]
+            self.fault_records.route(self._pwm_buf[at:at + w[_step.IO_OTHER_N]].copy())
+            w[_step.IO_OTHER_N] = 0
         if done:
             self._from_io()
             if self._rotor_rows is not None:
@@ -249,6 +300,19 @@ class BridgeLoop:
             return
         for i, row in enumerate(rows.tolist()):
             hook.write((k0 + 1 + i) * dt, row)
+
+    def in_python_next(self) -> bool:
+        """True when the next step of a batched run must take the per-step path (step_one):
+        the link is faulty or records are in flight, or a fault switches at that step (a
+        link fault's first records must already meet the link)."""
+        return self.link.engaged or self.sim.faults.next_step == self.sim.step_index + 1
+
+    def step_one(self, answer) -> None:
+        """One step of a batched run the per-step way: publish it, answer() (the FC answers
+        and the PWM is collected), and the batch's words taken afresh at the next batch."""
+        self.publish_step()
+        answer()
+        self._io_stale = True
 
     def batch_polls(self) -> tuple[int, int]:
         """FC polls that consumed records in the last run_batch, and the records the newest

@@ -54,6 +54,7 @@ class Disturbances:
         self._force_plan: list = []
         self._force_frames: set = set()
         self.kernel = None   # attach_kernel(): the simulator's step kernel
+        self._fault_scale = [1.0, 1.0, 1.0, 1.0]   # motor faults' (bridge/faults/motors.py)
         # Fixed 1 N magnitude; the summed force vector (N) goes into the direction.
         for frame in ("ned", "frd"):
             self.fdm.set_dist_force(frame, 1.0, (0.0, 0.0, 0.0))
@@ -126,8 +127,13 @@ class Disturbances:
         self.imu.set_injected_gyro_bias(gyro)
         self.ramping = ramping
 
+    def set_fault_thrust_scale(self, scale) -> None:
+        """The motor faults' thrust scales (issue 28), times the active motor biases."""
+        self._fault_scale = [float(s) for s in scale]
+        self._apply_motor_bias()
+
     def _apply_motor_bias(self) -> None:
-        scale = [1.0, 1.0, 1.0, 1.0]
+        scale = list(self._fault_scale)
         for d, _ in self._active.values():
             if d.type == "motor_bias":
                 scale = [a * b for a, b in zip(scale, d.thrust_scale)]

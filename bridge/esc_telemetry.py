@@ -8,14 +8,11 @@ its battery-side current, its temperature and the charge it has drawn.
 
 Where the numbers come from (keys and cited defaults in bridge/scenario_schema.py, [esc]):
 - rpm: JSBSim's motor model, ``fcs/mN-omega-rad_s`` after the step (60 / 2 pi rad/s).
-- current: the DC-motor equivalent of the 2212 920KV motor of jsbsim_models/quadx/motors.xml.
-  The model's shaft torque ``fcs/mN-torque-lbsft`` (the reaction torque JSBSim applies)
-  needs the motor current I_m = Q / Kt, Kt = 60 / (2 pi KV) N m/A; the winding needs
-  V_m = omega / (KV in rad/s/V) + I_m R. The ESC, a lossless buck converter here, draws
-  I = V_m I_m / V_pack from the pack. No-load (iron and friction) current is neglected.
-- voltage: the pack the FC models today (fc_sil/battery.py: cells x 4.2 V full to 3.3 V
-  empty, linear in the charge drawn, minus the sag I R), here fed with the ESC currents plus
-  the avionics current, solved for the sag the currents themselves cause.
+- current: each ESC's input power P (the DC-motor equivalent of the 2212 920KV motor,
+  bridge/battery/load.py) over the pack voltage: I = P / V_pack.
+- voltage: the physics-side pack (bridge/battery/pack.py, the one every autopilot reads)
+  under the present load of all ESCs plus the avionics, solved for the sag the currents
+  themselves cause; the pack's charge and temperature advance at its own report rate.
 - temperature: a first-order rise towards ambient + k x (power through the ESC), time
   constant tau, from the air temperature JSBSim gives at the start.
 Values are quantised at the source to what the ESC reports and what the HIL link's
@@ -27,16 +24,13 @@ from __future__ import annotations
 
 import math
 
+from silbridge.bridge.battery.load import RPM_PER_RAD_S
 from silbridge.bridge.errors import ScenarioError
 from silbridge.bridge.lowrate import Schedule
 from silbridge.shm.records import KIND_ESC, Kind, record_struct
 
 SLOT = record_struct(Kind.ESC)        # the whole 64-byte ESC slot (shm/records.py)
 MOTORS = 4
-_LBFFT_NM = 1.0 / 0.7375621           # lbf ft -> N m (motors.xml's factor)
-_RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
-_CELL_FULL_V = 4.2                    # the FC's pack curve (fc_sil/battery.py)
-_CELL_EMPTY_V = 3.3
 _MAH_PER_AS = 1000.0 / 3600.0
 _U16 = 65535
 
@@ -50,7 +44,7 @@ class EscTelemetry:
     """The ESCs of one flight: ``due(sim_ns)`` says whether an epoch is due at this physics
     step; ``write(buf, offset, seq0, sim_ns, dt_s)`` writes its MOTORS records."""
 
-    def __init__(self, cfg, physics_hz: int, ambient_c: float, omega_nodes, torque_nodes):
+    def __init__(self, cfg, physics_hz: int, ambient_c: float, load, pack):
         rate = float(cfg.telemetry_hz)
         if not rate > 0.0:      # the schema refuses it too; a direct caller gets the same words
             raise ScenarioError(f"esc.telemetry_hz must be > 0 Hz, got {rate:g}")
@@ -60,54 +54,27 @@ class EscTelemetry:
                                 "at most; lower it or raise physics.rate_hz")
         self.schedule = Schedule(rate)
         self.period_s = 1.0 / rate
-        self._omega = list(omega_nodes)
-        self._torque = list(torque_nodes)
-        kv_rad = cfg.kv_rpm_v / _RPM_PER_RAD_S          # rad/s per volt
-        self._ke = 1.0 / kv_rad                          # V s/rad = N m/A (Kt)
-        self._r_ohm = float(cfg.winding_ohm)
-        self._cells = int(cfg.battery_cells)
-        self._capacity_mah = float(cfg.battery_mah)
-        self._pack_ohm = cfg.battery_mohm * 1e-3
-        self._avionics_a = float(cfg.avionics_a)
+        self._load = load              # bridge/battery/load.py: each ESC's input power
+        self._pack = pack              # bridge/battery/pack.py: the one pack
         self._k_per_w = float(cfg.temp_k_per_w)
         self._tau_s = float(cfg.temp_tau_s)
         self._ambient_c = float(ambient_c)
         self.temp_c = [self._ambient_c] * MOTORS
         self.mah = [0.0] * MOTORS
-        self.avionics_mah = 0.0
         self.current_a = [0.0] * MOTORS
         self.rpm = [0.0] * MOTORS
-        self.voltage_v = self._open_circuit_v()
+        self.voltage_v = pack.voltage_v
         self.epochs = 0
 
     def due(self, sim_ns: int) -> bool:
         return sim_ns >= self.schedule.next_ns
 
-    def _open_circuit_v(self) -> float:
-        used = sum(self.mah) + self.avionics_mah
-        cap = self._capacity_mah
-        soc = 1.0 if cap <= 0 else min(1.0, max(0.0, 1.0 - used / cap))
-        return self._cells * (_CELL_EMPTY_V + (_CELL_FULL_V - _CELL_EMPTY_V) * soc)
-
-    def _pack_voltage(self, power_w: float) -> float:
-        """Terminal voltage V with V = E - R (P / V + I_avionics): the larger root."""
-        e = self._open_circuit_v() - self._pack_ohm * self._avionics_a
-        disc = e * e - 4.0 * self._pack_ohm * power_w
-        if disc <= 0.0:         # more power than the pack can give: it collapses to half
-            return max(0.0, e / 2.0)
-        return 0.5 * (e + math.sqrt(disc))
-
     def update(self) -> None:
         """Advance the electrical and thermal state by one report period (the values the
         ESCs report at this epoch)."""
-        omega = [max(0.0, h.get_double_value()) for h in self._omega]
-        q_nm = [max(0.0, h.get_double_value() * _LBFFT_NM) for h in self._torque]
-        p_in = []
-        for w, q in zip(omega, q_nm):
-            i_m = q / self._ke
-            v_m = w * self._ke + i_m * self._r_ohm
-            p_in.append(v_m * i_m)
-        v = self._pack_voltage(sum(p_in))
+        omega = self._load.omega_rad_s()
+        p_in = self._load.power_w(omega)
+        v = self._pack.solve(sum(p_in))[0]
         dt = self.period_s
         decay = 1.0 - math.exp(-dt / self._tau_s)
         for m in range(MOTORS):
@@ -116,9 +83,8 @@ class EscTelemetry:
             self.mah[m] += i * dt * _MAH_PER_AS
             target = self._ambient_c + self._k_per_w * p_in[m]
             self.temp_c[m] += (target - self.temp_c[m]) * decay
-        self.avionics_mah += self._avionics_a * dt * _MAH_PER_AS
         self.voltage_v = v
-        self.rpm = [w * _RPM_PER_RAD_S for w in omega]
+        self.rpm = [w * RPM_PER_RAD_S for w in omega]
 
     def write(self, buf, offset: int, seq0: int, sim_ns: int) -> int:
         """Update, then pack this epoch's MOTORS records at offset; returns MOTORS."""

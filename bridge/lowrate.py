@@ -14,7 +14,8 @@ Noise comes from one named stream per sensor (noise.NormalRows).
   (sigma_h, sigma_v, tau) and white velocity noise; the fix is published
   `latency_s` after its epoch (the first step at or after epoch + latency), as
   a receiver's message arrives late. The record's sim_ns is the arrival time;
-  the position is the one of the epoch.
+  the position is the one of the epoch. A GNSS fault (bridge/faults/gnss.py) replaces the
+  fix made at an epoch while it is on; the noise stream runs on as without it.
 """
 
 from __future__ import annotations
@@ -83,6 +84,7 @@ class Gnss:
         self.err_ned_m = None   # Gauss-Markov state, started from its stationary law
         self.last_epoch_ns = 0
         self.pending: deque = deque()
+        self.fault = None       # bridge/faults/gnss.py GnssFault while a GNSS fault is on
 
     def epoch(self, sim_ns: int, lat_rad: float, lon_rad: float, alt_msl_m: float,
               vel_ned_m_s) -> None:
@@ -97,18 +99,27 @@ class Gnss:
             q = math.sqrt(1.0 - a * a)
             self.err_ned_m = [a * self.err_ned_m[i] + q * sig[i] * n[i] for i in range(3)]
         self.last_epoch_ns = sim_ns
-        e = self.err_ned_m
+        v = c.vel_sigma_m_s
+        vel = (vel_ned_m_s[0] + v * n[3], vel_ned_m_s[1] + v * n[4], vel_ned_m_s[2] + v * n[5])
+        if self.fault is None:
+            fix = self.fix(lat_rad, lon_rad, alt_msl_m, self.err_ned_m, vel, c.pos_sigma_h_m,
+                           c.pos_sigma_v_m, c.fix_type, c.satellites)
+        else:
+            fix = self.fault.fix(self, sim_ns, lat_rad, lon_rad, alt_msl_m, vel)
+            if fix is None:    # the receiver is silent
+                return
+        self.pending.append((sim_ns + self.latency_ns, sim_ns, fix))
+
+    def fix(self, lat_rad: float, lon_rad: float, alt_msl_m: float, e, vel, sigma_h_m: float,
+            sigma_v_m: float, fix_type: int, satellites: int) -> tuple:
+        """The record's fields of a fix at the true position plus the error e (NED, m) with
+        velocity vel (NED, m/s) and the stated accuracy."""
         lat_deg = math.degrees(lat_rad + e[0] / self.m_per_rad_lat)
         lon_deg = math.degrees(lon_rad + e[1] / self.m_per_rad_lon)
         alt_m = alt_msl_m - e[2]
-        v = c.vel_sigma_m_s
         # Whole cm/s, as HIL_GPS carries it (same fix over shared memory and MAVLink).
         q = hil_quant.velocity_m_s
-        vel = (q(vel_ned_m_s[0] + v * n[3]), q(vel_ned_m_s[1] + v * n[4]),
-               q(vel_ned_m_s[2] + v * n[5]))
-        fix = (int(round(lat_deg * 1e7)), int(round(lon_deg * 1e7)), int(round(alt_m * 1000.0)),
-               vel[0], vel[1], vel[2],
-               min(65535, int(round(c.pos_sigma_h_m * 100.0))),
-               min(65535, int(round(c.pos_sigma_v_m * 100.0))),
-               c.fix_type, c.satellites)
-        self.pending.append((sim_ns + self.latency_ns, sim_ns, fix))
+        return (int(round(lat_deg * 1e7)), int(round(lon_deg * 1e7)),
+                int(round(alt_m * 1000.0)), q(vel[0]), q(vel[1]), q(vel[2]),
+                min(65535, int(round(sigma_h_m * 100.0))),
+                min(65535, int(round(sigma_v_m * 100.0))), fix_type, satellites)

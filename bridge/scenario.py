@@ -29,8 +29,10 @@ import numpy as np
 
 from silbridge.bridge import scenario_schema as S
 from silbridge.bridge import imu_raw, vibration_checks
+from silbridge.bridge.faults import failure_checks
 from silbridge.bridge.errors import ScenarioError
 from silbridge.magfield import field_at
+from silbridge.shm import fault_catalog
 from silbridge.shm.records import NS_PER_S
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
@@ -85,6 +87,7 @@ class Scenario:
     source: str
     draws: dict = field(default_factory=dict)
     fc_params: list[Section] = field(default_factory=list)   # [[fc_param]]: FC parameter sets
+    failures: list[Section] = field(default_factory=list)    # [[failure]]: faults on purpose
     # Sections declared in scenario_schema.SECTIONS beyond the fields above (issue 26's
     # [vehicle], [vibration], ...): read as attributes, sc.vehicle, like the others.
     extra: dict = field(default_factory=dict)
@@ -127,6 +130,7 @@ class Scenario:
             "disturbances": [d.to_dict() for d in self.disturbances],
             "setpoints": [s.to_dict() for s in self.setpoints],
             "fc_params": [p.to_dict() for p in self.fc_params],
+            "failures": [f.to_dict() for f in self.failures],
             "source": self.source, "draws": dict(self.draws),
             **{name: sec.to_dict() for name, sec in self.extra.items()},
         }
@@ -225,7 +229,7 @@ class _Resolver:
 
     def scenario(self) -> Scenario:
         raw = self.raw
-        allowed = set(S.TOP) | set(S.SECTIONS) | {"disturbance", "setpoint", "fc_param"}
+        allowed = set(S.TOP) | set(S.SECTIONS) | {"disturbance", "setpoint", "fc_param", "failure"}
         for key in raw:
             if key not in allowed:
                 self.fail(key, f"unknown key; valid top-level keys are {', '.join(sorted(allowed))}")
@@ -233,7 +237,8 @@ class _Resolver:
         if seed_val is S.REQUIRED:
             self.fail("seed", "missing required field; add e.g. 'seed = 1'")
         self.seed = self.value("seed", seed_val, S.TOP["seed"])
-        top = self.table("", raw, S.TOP, skip={"disturbance", "setpoint", "fc_param", *S.SECTIONS})
+        top = self.table("", raw, S.TOP, skip={"disturbance", "setpoint", "fc_param", "failure",
+                                                 *S.SECTIONS})
         self.duration_s = top["duration_s"]
         sections = {}
         for sec, schema in S.SECTIONS.items():
@@ -256,6 +261,8 @@ class _Resolver:
                       disturbances=dists, setpoints=sps, source=self.source, draws=self.draws,
                       fc_params=[Section(self.table(f"fc_param[{i}].", e, S.FC_PARAM))
                                  for i, e in enumerate(self.array("fc_param"))],
+                      failures=[Section(self.failure_entry(f"failure[{i}]", e))
+                                for i, e in enumerate(self.array("failure"))],
                       extra={k: v for k, v in sections.items() if k not in _FIXED_SECTIONS})
         self.check_consistency(sc)
         return sc
@@ -268,6 +275,9 @@ class _Resolver:
 
     def table(self, prefix: str, tbl: dict, schema: dict, skip=()) -> dict:
         for key in tbl:
+            if prefix + key in S.MOVED:
+                self.fail(prefix + key, f"moved to {S.MOVED[prefix + key]}: write it under "
+                                        f"[{S.MOVED[prefix + key].split('.')[0]}]")
             if key not in schema and key not in skip:
                 self.fail(prefix + key, f"unknown key; valid keys{' in [' + prefix[:-1] + ']' if prefix else ''} "
                                         f"are {', '.join(schema)}")
@@ -292,6 +302,36 @@ class _Resolver:
         if kind == "tilt":
             return self.tilt_entry(prefix, tbl, schema)
         return self.table(prefix + ".", tbl, schema)
+
+    def failure_entry(self, prefix: str, tbl: dict) -> dict:
+        """A [[failure]]: the unit, then its type, then the common keys and the type's
+        parameters (scenario_schema.FAILURE_TYPES, built from shm/fault_catalog.py)."""
+        units = S.FAILURE_TYPES
+        unit = tbl.get("unit")
+        if unit is None:
+            self.fail(prefix + ".unit", f"missing required field; one of {', '.join(units)}")
+        if not isinstance(unit, str) or unit not in units:
+            self.fail(prefix + ".unit", f"unknown unit {unit!r}; one of {', '.join(units)}")
+        types = units[unit]
+        kind = tbl.get("type")
+        if kind is None:
+            self.fail(prefix + ".type", f"missing required field; {unit} types: {', '.join(types)}")
+        if not isinstance(kind, str) or kind not in types:
+            self.fail(prefix + ".type", f"unknown {unit} type {kind!r}; one of {', '.join(types)}")
+        schema = {**S.FAILURE_COMMON, **types[kind]}
+        for key in tbl:
+            if key not in schema:
+                params = ", ".join(types[kind]) or "none"
+                common = ", ".join(S.FAILURE_COMMON)
+                self.fail(f"{prefix}.{key}", f"unknown key for {unit}.{kind}; common keys are "
+                                             f"{common}, its parameters {params}")
+        out = self.table(prefix + ".", tbl, schema)
+        allowed = fault_catalog.unit_named(unit).instances
+        if out["instance"] not in allowed:
+            self.fail(prefix + ".instance", f"{unit} has no instance {out['instance']}; one of "
+                                            f"{', '.join(map(str, allowed))} "
+                                            f"({fault_catalog.unit_named(unit).instance_text})")
+        return out
 
     def tilt_entry(self, prefix: str, tbl: dict, schema: dict) -> dict:
         """Tilt commands repeat; each repetition draws its own amplitude and hold."""
@@ -419,6 +459,7 @@ class _Resolver:
                 self.fail(f"setpoint[{i}].start_s", f"{sp.start_s:g} s is not before the end "
                                                      f"of the run ({sc.duration_s:g} s)")
         vibration_checks.check(sc, self.fail)   # [vibration], [mount], [imu_chip]
+        failure_checks.check(sc, self.fail)     # [[failure]] against the rest of the run
         imu_raw.check(sc, self.fail)            # imu_chip.log_raw
         for i, fp in enumerate(sc.fc_params):
             if fp.at_s >= sc.duration_s:

@@ -83,11 +83,26 @@ Sensor defaults, with sources:
     is kQ omega_max^2 = 2.3495e-7 x 855.5^2 = 0.1720 N m, i.e. I = Q / Kt = 16.57 A with
     Kt = 60 / (2 pi 920) = 0.01038 N m/A; the 20 % speed loss is that current across the
     winding: R = 0.2 x 11.1 V / 16.57 A = 0.134 ohm. No-load current is neglected.
-  - battery_cells 4, battery_mah 3300, battery_mohm 25, avionics_a 0.6: the pack the FC
-    models today (fc_sil/battery.py; SB_BATT_CELLS, BATT_CAPACITY, SB_BATT_R_MOHM,
-    SB_BATT_I_IDLE defaults), so the ESCs and the FC's power module see the same pack.
-    (motors.xml sizes the top speed on 3S; on 4S the ESC never needs full duty: the winding
-    voltage at full throttle, 11.1 V, stays below the pack's.)
+  - The pack the ESCs draw from is [battery] (below). (motors.xml sizes the top speed on
+    3S; on 4S the ESC never needs full duty: the winding voltage at full throttle, 11.1 V,
+    stays below the pack's.)
+- Battery ([battery], bridge/battery/; always on, every autopilot reads it):
+  - cells 4, capacity_mah 3300, internal_mohm 25, avionics_a 0.6: the pack the FC modelled
+    before issue 28 (SB_BATT_CELLS, BATT_CAPACITY, SB_BATT_R_MOHM, SB_BATT_I_IDLE defaults,
+    then the [esc] keys battery_cells, battery_mah, battery_mohm, avionics_a): a 4S 3300 mAh
+    LiPo of a 450 mm quad, 6.25 mOhm a cell, at 25 degC and full charge.
+  - Open-circuit curve and the resistance's rise at low charge: Chen and Rincon-Mora, IEEE
+    Trans. Energy Conversion 21(2), 2006 (bridge/battery/cell.py).
+  - activation_kj_mol 35: the resistance's temperature law is Arrhenius, as PVsyst's Li-ion
+    model after Lundgren (2016), whose "usual values are 30 to 40 kJ/mol" (pvsyst.com help,
+    Internal resistance): the middle of that range.
+  - heat_capacity_j_k 320: the pack's 0.320 kg (quadx.xml's battery mass) at ~1.0 J/(g K),
+    the order of a Li-ion pouch cell's specific heat; assumed, no datasheet of this pack.
+  - thermal_k_per_w 1.8: a 4S 3300 mAh brick (~135 x 43 x 30 mm, 0.022 m^2 of surface) in
+    the prop wash at ~25 W/(m^2 K) (low-speed forced air): 1 / (25 x 0.022) = 1.8 K/W. With
+    the heat capacity, tau = 580 s. Assumed figures: set them from a logged pack temperature.
+  - rate_hz 10: ArduCopter reads its battery monitor at 10 Hz (its scheduler's
+    read_battery task).
   - temp_k_per_w 0.1, temp_tau_s 14: an ESC passes its motor's power at ~95 % efficiency
     (BLHeli_32-class MOSFET stages), so it dissipates 5 % of it; a ~10 g ESC board in the prop
     wash with ~2 K/W to the air rises 0.05 x 2 = 0.1 K per W passed (hover, 37 W a motor:
@@ -148,6 +163,8 @@ Sensor defaults, with sources:
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+from silbridge.shm import fault_catalog
 
 REQUIRED = object()
 
@@ -315,15 +332,40 @@ SECTIONS = {
                           "unset: no ESC telemetry"),
         "kv_rpm_v": F("float", 920.0, above=0, unit="rpm/V", text="motor velocity constant"),
         "winding_ohm": F("float", 0.134, min=0, unit="ohm", text="motor winding resistance"),
-        "battery_cells": F("int", 4, min=1, max=14, text="series cells of the pack the ESCs see"),
-        "battery_mah": F("float", 3300.0, above=0, unit="mAh", text="pack capacity"),
-        "battery_mohm": F("float", 25.0, min=0, unit="mOhm", text="pack internal resistance"),
-        "avionics_a": F("float", 0.6, min=0, unit="A", text="pack current besides the ESCs"),
         "temp_k_per_w": F("float", 0.1, min=0, unit="K/W",
                           text="ESC steady temperature rise per W it passes to its motor"),
         "temp_tau_s": F("float", 14.0, above=0, unit="s",
                         text="time constant of the ESC temperature rise"),
     },
+    # The physics-side battery pack (bridge/battery/; derivations in the module docstring).
+    # Always on: every autopilot reads this pack.
+    "battery": {
+        "cells": F("int", 4, min=1, max=14, text="cells in series"),
+        "capacity_mah": F("float", 3300.0, above=0, unit="mAh", text="nominal capacity"),
+        "internal_mohm": F("float", 25.0, min=0, unit="mOhm",
+                           text="pack internal resistance, full charge, 25 degC"),
+        "avionics_a": F("float", 0.6, min=0, unit="A", text="pack current besides the ESCs"),
+        "initial_soc": F("float", 1.0, min=0, max=1, drawable=True,
+                         text="state of charge at the start (1 = full)"),
+        "temperature_c": F("float", None, unit="degC",
+                           text="pack temperature at the start; default: the air's"),
+        "activation_kj_mol": F("float", 35.0, min=0, unit="kJ/mol",
+                               text="Arrhenius activation energy of the internal resistance"),
+        "heat_capacity_j_k": F("float", 320.0, above=0, unit="J/K", text="pack heat capacity"),
+        "thermal_k_per_w": F("float", 1.8, above=0, unit="K/W",
+                             text="pack to air thermal resistance"),
+        "rate_hz": F("float", 10.0, above=0, unit="Hz",
+                     text="pack update and BATTERY record rate"),
+    },
+}
+
+# Keys that moved: old dotted name -> new dotted name (a file with the old key is refused
+# with a message naming the new one).
+MOVED = {
+    "esc.battery_cells": "battery.cells",
+    "esc.battery_mah": "battery.capacity_mah",
+    "esc.battery_mohm": "battery.internal_mohm",
+    "esc.avionics_a": "battery.avionics_a",
 }
 
 # [[disturbance]] entries: common keys plus per-type keys.
@@ -394,3 +436,26 @@ FC_PARAM = {
     "at_s": F("float", min=0, drawable=True, unit="s",
               text="sim time; applied after the first physics step that ends at or after it"),
 }
+
+# [[failure]] entries (issue 28): a fault of the catalog (shm/fault_catalog.py) on at at_s for
+# duration_s. The common keys are declared here; each type's parameters are the catalog's,
+# turned into fields below, so a parameter is declared once, there.
+FAILURE_COMMON = {
+    "unit": F("str", choices=tuple(u.name for u in fault_catalog.UNITS),
+              text="what fails (the catalog's unit)"),
+    "type": F("str", text="how it fails (one of the unit's types)"),
+    "instance": F("int", 1, text="which one: 1, or 0 = all where the unit allows it"),
+    "at_s": F("float", min=0, drawable=True, unit="s", text="sim time it switches on"),
+    "duration_s": F("float", None, above=0, drawable=True, unit="s",
+                    text="how long it stays on; default: to the end of the run"),
+}
+
+
+def _failure_field(p: fault_catalog.FaultParam) -> Field:
+    kind = "vec3" if p.kind == "vec3" else p.kind
+    return F(kind, p.default, min=p.min, max=p.max, drawable=True, unit=p.unit, text=p.text)
+
+
+# {unit: {type: {parameter: Field}}}
+FAILURE_TYPES = {u.name: {t.name: {p.name: _failure_field(p) for p in t.params} for t in u.types}
+                 for u in fault_catalog.UNITS}

@@ -7,7 +7,8 @@
 JSBSim, and returns that step's records (numpy RECORD_DTYPE; a view into a
 preallocated buffer, valid until the next call: copy it to keep it), in the
 contract's order: the step's IMU samples (oldest first), GT_ATT, GT_NAV, then
-BARO, MAG, GNSS if due, then SETPOINT if the profile changed; the last record
+BARO, MAG, GNSS if due, then SETPOINT if the profile changed, then the battery's
+BATTERY (10 Hz, bridge/battery/) and the ESC reports when due; the last record
 carries FLAG_STEP_END. Step k has sim_ns = k * dt_ns; oversampled IMU sample
 times are described in imu.py. Sequence numbers count per kind from 0.
 
@@ -33,11 +34,14 @@ import math
 import numpy as np
 
 from silbridge.bridge import _step
+from silbridge.bridge.battery import Battery, MotorLoad
 from silbridge.bridge import esc_telemetry
 from silbridge.bridge import step_buffer as sb
 from silbridge.bridge import vibration_consts
 from silbridge.bridge.disturbances import Disturbances
 from silbridge.bridge.errors import SimulatorError
+from silbridge.bridge.faults import appliers as fault_appliers
+from silbridge.bridge.faults.engine import FaultEngine
 from silbridge.bridge.fdm import FT_M, LBF_N, PSF_PA, SLUG_KG, Fdm
 from silbridge.bridge.frames import quat_from_euler, wrap_pi
 from silbridge.bridge.imu import ImuModel
@@ -75,10 +79,11 @@ class Simulator:
         self._estimate_hover()
         self._make_sensors(sc, block_rows)
         self._plan_imu_sampling()
-        self.esc = self._make_esc(sc)      # [esc] telemetry (None unless asked)
+        self.battery, self.esc = self._make_power(sc)   # the pack; [esc] telemetry or None
+        self.faults.register("battery", self.battery.applier)
         max_imu = -(-self.imu_hz // self.physics_hz) + 1
         esc_slots = esc_telemetry.MOTORS if self.esc else 0
-        self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4 + esc_slots)
+        self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4 + esc_slots + 1)
         self._seq = [0] * len(Kind)   # records published per kind; the header seq is this mod 2^32
         self.kernel = self._make_kernel(kernel_cls)
         # GNSS fixes released by the kernel at their step (kernels with hold(): the C one).
@@ -128,6 +133,7 @@ class Simulator:
         self.mag = Mag(sc.mag, seed)
         self.gnss = Gnss(sc.gnss, seed, fdm.m_per_rad_lat, fdm.m_per_rad_lon)
         self.dist = Disturbances(sc, fdm, self.imu, self.dt_ns, self._event)
+        self.faults = FaultEngine(sc.failures, self.dt_ns, sc.duration_s, self._event)
         self.setpoints = SetpointProgram(sc, self.dt_ns, math.radians(sc.home.heading_deg))
         # The scenario's current command (what the FC was told), for summaries.
         self.command = {"roll_rad": 0.0, "pitch_rad": 0.0, "alt_m": 0.0}
@@ -166,14 +172,17 @@ class Simulator:
             c["vib_accel"] = c["vib_gyro"] = 0.0
         return {**c, **vib}
 
-    def _make_esc(self, sc):
-        """The ESCs' telemetry when the scenario asks for it ([esc] telemetry_hz), else None."""
-        if not esc_telemetry.enabled(sc):
-            return None
+    def _make_power(self, sc):
+        """The battery pack and its load (bridge/battery/); the ESCs' telemetry on that pack
+        when the scenario asks for it ([esc] telemetry_hz), else None."""
         pm = self.fdm.fdm.get_property_manager()
         torque = [pm.get_node(f"fcs/m{i}-torque-lbsft") for i in range(1, 5)]
-        return esc_telemetry.EscTelemetry(sc.esc, self.physics_hz, self._ambient_c,
-                                          self.fdm.h_omega, torque)
+        load = MotorLoad(sc.esc, self.fdm.h_omega, torque)
+        battery = Battery(sc.battery, self._ambient_c, load)
+        if not esc_telemetry.enabled(sc):
+            return battery, None
+        return battery, esc_telemetry.EscTelemetry(sc.esc, self.physics_hz, self._ambient_c,
+                                                   load, battery.pack)
 
     def _make_kernel(self, kernel_cls):
         """The per-step kernel: it calls the bound methods of JSBSim's property nodes
@@ -199,6 +208,7 @@ class Simulator:
                              mc.noise_gauss)
         kernel.set_baro_block(self.baro.noise.next_block())
         kernel.set_mag_block(self.mag.noise.next_block())
+        fault_appliers.register_all(self)    # gnss, baro, mag, gyro, accel, motor faults
         if self._scalar_imu:
             kernel.set_block(*self.imu.next_scalar_block())
             self._kstep = kernel.step
@@ -229,7 +239,7 @@ class Simulator:
                 "baro": baro, "mag": mag,
                 "gnss": s[Kind.GNSS] - (self.kernel.held if self._hold_gnss else 0),
                 "setpoint": s[Kind.SETPOINT],
-                **({"esc": s[Kind.ESC]} if self.esc else {})}
+                **({"esc": s[Kind.ESC]} if self.esc else {}), "battery": s[Kind.BATTERY]}
 
     # --- the step ---------------------------------------------------------------------
     def _disturb_before(self) -> int:
@@ -240,6 +250,8 @@ class Simulator:
             dist.switch(k)
         elif dist.ramping:
             dist.update(k)
+        if k == self.faults.next_step:
+            self.faults.switch(k)
         return k
 
     def step(self, pwm_us) -> np.ndarray:
@@ -294,6 +306,8 @@ class Simulator:
             n = 1
         elif dist.next_step > k:
             n = min(n, dist.next_step - k)
+        if self.faults.next_step > k:          # a failure switches there: end the batch
+            n = min(n, self.faults.next_step - k)
         kernel = self.kernel
         done = kernel.run_batch(n)
         flags = self._batch_io[_step.IO_PENDING]
@@ -336,8 +350,8 @@ class Simulator:
         return count
 
     def _slow_sensors(self, count: int) -> int:
-        """GNSS records due at this step, a changed setpoint and the ESC reports when due
-        (the kernel wrote the baro and mag records)."""
+        """GNSS records due at this step, a changed setpoint, the ESC reports and the battery's
+        when due (the kernel wrote the baro and mag records)."""
         sim_ns = self.sim_ns
         st = self._state
         buf = self.buffer
@@ -354,6 +368,8 @@ class Simulator:
             count += 1
         if self._hold_gnss:
             self._hold_pending()
+        if self.faults.pollers:                # a fault following a slow quantity
+            self.faults.poll(sim_ns)
         if self.step_index == self.setpoints.next_step:
             _, s_roll, s_pitch, s_yaw, s_alt, mask = self.setpoints.pop()
             sb.SETPOINT.pack_into(buf.buf, count * 64, 8, 0, self._next_seq(8), sim_ns, 0,
@@ -364,6 +380,8 @@ class Simulator:
                 cmd["roll_rad"], cmd["pitch_rad"] = s_roll, s_pitch
             if mask & 2:
                 cmd["alt_m"] = s_alt
+        if self.battery.due(sim_ns):
+            count += self.battery.write(buf.buf, count * 64, self._next_seq(Kind.BATTERY), sim_ns)
         esc = self.esc
         if esc is not None and esc.due(sim_ns):
             n = esc.write(buf.buf, count * 64, self._seq[Kind.ESC], sim_ns)
@@ -394,6 +412,7 @@ class Simulator:
             due.append(self.setpoints.next_step * self.dt_ns)
         if self.esc is not None:
             due.append(self.esc.schedule.next_ns)
+        due.append(self.battery.schedule.next_ns)
         self.kernel.next_slow_ns = min(due)
 
     def _imu_count(self, k: int) -> int:

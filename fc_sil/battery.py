@@ -1,83 +1,70 @@
-"""A simple battery model for the SIL vehicle: what a power module would measure.
+"""The FC's battery monitor: it reads the bridge's physics-side pack (BATTERY records).
 
-The bridge simulates no battery, so the FC models one from its own motor outputs, as a
-power module would see it: current = avionics + per-motor current that grows with throttle
-to the 1.5 power (propeller power ~ thrust^1.5, thrust ~ throttle), consumed charge by
-integration, and terminal voltage = open-circuit voltage of the remaining charge minus the
-sag I*R. The open-circuit curve is linear from 4.2 V (full) to 3.3 V (empty) per cell: crude
-but monotonic, so the voltage falls with use and sags under load as a real pack does.
+The pack is simulated on the physics side (bridge/battery/), so every autopilot on the same
+physics reads the same voltage and current. The record router keeps the latest BATTERY
+record (fc_sil/ext/record_batch.c; over MAVLink HIL it is rebuilt from the bridge's
+BATTERY_STATUS, mavlink/hil/hil_codec.py); ``read(core)`` takes it once per supervisor
+step. Like a smart battery (ArduPilot's BATT_MONITOR 7, SMBus) the pack reports its state
+of charge; remaining capacity is that fraction of BATT_CAPACITY, the capacity the FC is
+told (the scenario's [battery] capacity_mah and BATT_CAPACITY are both 3300 mAh by
+default). Until the first record arrives the monitor is not ``valid``: voltage 0, current
+and consumption -1 (MAVLink's "not measured"), and the battery failsafe waits.
 
-Parameters (fc_params.def): BATT_CAPACITY, SB_BATT_CELLS, SB_BATT_R_MOHM, SB_BATT_I_MOT,
-SB_BATT_I_IDLE. Failsafe thresholds are read by failsafe.py, not here.
+Parameters (fc_params.def): BATT_CAPACITY. Failsafe thresholds are read by failsafe.py.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-CELL_FULL_V = 4.2
-CELL_EMPTY_V = 3.3
-
 
 @dataclass
 class BatteryConfig:
     capacity_mah: float = 3300.0
-    cells: int = 4
-    r_ohm: float = 0.025
-    i_motor_full_a: float = 18.0
-    i_idle_a: float = 0.6
 
     @classmethod
     def from_params(cls, get) -> "BatteryConfig":
-        return cls(capacity_mah=float(get("BATT_CAPACITY")), cells=int(get("SB_BATT_CELLS")),
-                   r_ohm=float(get("SB_BATT_R_MOHM")) * 1e-3,
-                   i_motor_full_a=float(get("SB_BATT_I_MOT")),
-                   i_idle_a=float(get("SB_BATT_I_IDLE")))
+        return cls(capacity_mah=float(get("BATT_CAPACITY")))
 
 
-class BatteryModel:
-    """Integrates current from PWM outputs; read voltage_v, current_a, consumed_mah."""
+class BatteryMonitor:
+    """The latest report of the bridge's pack; read voltage_v, current_a, consumed_mah,
+    remaining_pct, remaining_mah, temperature_c, lowest_cell_v, cells."""
 
-    def __init__(self, cfg: BatteryConfig, pwm_min_us: float = 1000.0,
-                 pwm_max_us: float = 2000.0):
+    def __init__(self, cfg: BatteryConfig):
         self.cfg = cfg
-        self.pwm_min_us = pwm_min_us
-        self.pwm_max_us = pwm_max_us
-        self.consumed_mah = 0.0
-        self.current_a = cfg.i_idle_a
-        self.voltage_v = self._ocv() - self.current_a * cfg.r_ohm
+        self.valid = False
+        self.sim_ns = -1
+        self.voltage_v = 0.0
+        self.current_a = -1.0
+        self.consumed_mah = -1.0
+        self.remaining = 1.0          # state of charge the pack reports, 0..1
+        self.temperature_c = 0.0
+        self.lowest_cell_v = 0.0
+        self.cells = 0
 
-    def configure(self, cfg: BatteryConfig, pwm_min_us: float, pwm_max_us: float) -> None:
+    def configure(self, cfg: BatteryConfig) -> None:
         self.cfg = cfg
-        self.pwm_min_us, self.pwm_max_us = pwm_min_us, pwm_max_us
 
-    def _soc(self) -> float:
-        cap = self.cfg.capacity_mah
-        if cap <= 0:
-            return 1.0
-        return min(1.0, max(0.0, 1.0 - self.consumed_mah / cap))
-
-    def _ocv(self) -> float:
-        return self.cfg.cells * (CELL_EMPTY_V + (CELL_FULL_V - CELL_EMPTY_V) * self._soc())
-
-    def update(self, pwm_us, dt_s: float) -> None:
-        """Advance by dt_s with the given motor outputs [us]."""
-        span = max(1.0, self.pwm_max_us - self.pwm_min_us)
-        i = self.cfg.i_idle_a
-        for us in pwm_us:
-            thr = min(1.0, max(0.0, (float(us) - self.pwm_min_us) / span))
-            i += self.cfg.i_motor_full_a * thr ** 1.5
-        self.current_a = i
-        self.consumed_mah += i * dt_s * (1000.0 / 3600.0)
-        self.voltage_v = max(0.0, self._ocv() - i * self.cfg.r_ohm)
+    def read(self, core) -> None:
+        """Take the newest BATTERY record the FC core's router kept (Core.battery())."""
+        count, sim_ns, v, i, mah, rem, temp, low, cells = core.battery()
+        if count == 0:
+            return
+        self.valid = True
+        self.sim_ns = sim_ns
+        self.voltage_v, self.current_a, self.consumed_mah = v, i, mah
+        self.remaining, self.temperature_c = rem, temp
+        self.lowest_cell_v, self.cells = low, cells
 
     @property
     def remaining_pct(self) -> int:
-        """-1 when the capacity is not tracked (BATT_CAPACITY 0), as ArduPilot reports it."""
-        if self.cfg.capacity_mah <= 0:
+        """-1 when the capacity is not tracked (BATT_CAPACITY 0) or nothing was reported yet,
+        as ArduPilot reports it."""
+        if self.cfg.capacity_mah <= 0 or not self.valid:
             return -1
-        return int(round(100.0 * self._soc()))
+        return int(round(100.0 * self.remaining))
 
     @property
     def remaining_mah(self) -> float:
-        return max(0.0, self.cfg.capacity_mah - self.consumed_mah)
+        return max(0.0, self.remaining * self.cfg.capacity_mah)

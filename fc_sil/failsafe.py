@@ -9,9 +9,12 @@ when it is on the ground (nothing: a landed vehicle only stays landed).
   the link's own time) while armed and flying -> RTL (FS_GCS_ENABLE 1) or LAND (5).
 * sensors (sim time, SB_FS_SENS_TO): IMU stream lost -> motors to a safe state (disarm: the
   FC cannot stabilise without rates, and spinning motors under no control are the danger);
-  barometer lost while flying -> LAND; GNSS silent for SB_GPS_TO or no 3D fix while a
-  position mode flies -> LAND (ArduCopter's EKF failsafe default).
-* battery: voltage below BATT_LOW_VOLT (BATT_CRT_VOLT) for BATT_LOW_TIMER, or remaining
+  barometer lost while flying -> LAND. GNSS loss is the EKF failsafe's, as in ArduCopter.
+* estimator and flight checks as ArduCopter 4.6 (docs/reference/failsafes.md), each in its
+  module: the innovation test ratios (innov_ratios.py), GPS glitch messages (gps_glitch.py),
+  EKF failsafe (ekf_check.py), vibration (vibe_check.py), crash (crash_check.py), thrust
+  loss (thrust_loss.py), yaw imbalance (yaw_imbalance.py).
+* battery (the bridge's pack, battery.py): voltage below BATT_LOW_VOLT (BATT_CRT_VOLT) for BATT_LOW_TIMER, or remaining
   capacity below BATT_LOW_MAH (BATT_CRT_MAH) -> BATT_FS_LOW_ACT (BATT_FS_CRT_ACT):
   0 warn only, 1 LAND, 2 RTL (LAND when RTL is impossible).
 """
@@ -23,6 +26,14 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 from silbridge.mavlink.gcs.vehicle_api import CopterMode
 from silbridge.shm.records import Kind
 
+from .crash_check import CrashCheck
+from .ekf_check import EkfCheck
+from .gps_glitch import GpsGlitchCheck
+from .innov_ratios import InnovationRatios
+from .thrust_loss import ThrustLossCheck
+from .vibe_check import VibrationCheck
+from .yaw_imbalance import YawImbalanceCheck
+
 CRIT = mav.MAV_SEVERITY_CRITICAL
 
 
@@ -31,7 +42,13 @@ class FailsafeMonitor:
         self.gcs = False
         self.imu = False
         self.baro = False
-        self.gps = False
+        self.ratios = InnovationRatios()
+        self.glitch = GpsGlitchCheck()
+        self.ekf = EkfCheck()
+        self.vibe = VibrationCheck()
+        self.crash = CrashCheck()
+        self.thrust = ThrustLossCheck()
+        self.yaw = YawImbalanceCheck()
         self.batt_low = False
         self.batt_crit = False
         self._low_since_ns = None
@@ -39,10 +56,12 @@ class FailsafeMonitor:
 
     @property
     def active(self) -> bool:
-        return self.gcs or self.imu or self.baro or self.gps or self.batt_low or self.batt_crit
+        return (self.gcs or self.imu or self.baro or self.ekf.failsafe or self.batt_low
+                or self.batt_crit)
 
     def check(self, v) -> None:
         self._check_sensors(v)
+        self._check_estimator(v)
         self._check_gcs(v)
         self._check_battery(v)
 
@@ -65,13 +84,17 @@ class FailsafeMonitor:
             v.set_mode_internal(CopterMode.LAND, "baro failsafe")
         elif not baro_lost:
             self.baro = False
-        if v.mode.requires_position and v.armed and v.airborne and not v.position_ok():
-            if not self.gps:
-                self.gps = True
-                v.statustext(CRIT, "Failsafe: lost GPS position, landing")
-                v.set_mode_internal(CopterMode.LAND, "GPS failsafe")
-        elif v.position_ok():
-            self.gps = False
+
+    # ---- estimator, crash, thrust loss, vibration (ArduCopter 4.6) -------------------------
+
+    def _check_estimator(self, v) -> None:
+        self.ratios.update(v)
+        self.glitch.check(v, self.ratios)
+        self.ekf.check(v, self.ratios)
+        self.vibe.check(v, self.ekf)
+        self.thrust.check(v)
+        self.yaw.check(v, self.thrust.boost)
+        self.crash.check(v)
 
     # ---- GCS --------------------------------------------------------------------------------
 
@@ -97,6 +120,8 @@ class FailsafeMonitor:
 
     def _check_battery(self, v) -> None:
         cfg, b = v.cfg, v.battery
+        if not b.valid:         # no report from the bridge's pack yet
+            return
         low = self._level(v, cfg.batt_low_volt, cfg.batt_low_mah, "_low_since_ns")
         crit = self._level(v, cfg.batt_crt_volt, cfg.batt_crt_mah, "_crit_since_ns")
         if crit and not self.batt_crit:

@@ -316,6 +316,12 @@ class FcLoop:
             self._hand_on(n, k, (newest_sim, newest_wall, consume, pwm_wall, period))
         return n
 
+    def push_records(self, recs: np.ndarray) -> int:
+        """Records of another kind the FC sends the bridge beside its PWM (FAULT, from the
+        supervisor between polls): on the same actuator link, after the PWM published so far,
+        so the bridge reads them at its next collection, in order."""
+        return self._push_pwm(recs)
+
     def close(self) -> None:
         """Detach the C record router from the segment (before the segment closes); a
         poll after this raises."""
@@ -356,7 +362,8 @@ STOP_GRACE_S = 1.0
 # The polls Python follows besides FcLoop.python_due's: those that take a record of a kind
 # whose step `fly --processes 1` finishes in Python (the bridge kernel's F_* flags), so the
 # supervisor sees the same polls in both (AutoFlight's declination waits for a GNSS fix).
-_PYTHON_KINDS = (1 << Kind.GNSS) | (1 << Kind.SETPOINT) | (1 << Kind.ESC)
+_PYTHON_KINDS = ((1 << Kind.GNSS) | (1 << Kind.SETPOINT) | (1 << Kind.ESC)
+                 | (1 << Kind.BATTERY))
 
 def _served_in_c(loop: FcLoop):
     """serve(timeout_s) -> (polls, timed_out): in lockstep over shared memory, the FC's

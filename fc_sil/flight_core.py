@@ -264,6 +264,16 @@ class FlightCore:
         """The last GNSS fix routed to the FC, or None."""
         return self._c.gnss()
 
+    def innovations(self) -> dict:
+        """The estimators' latest innovations (read-only): baro_innov_m (baro - vertical
+        estimate, in flight), baro_alt_m, have_baro, last_baro_ns, heading_err_rad (attitude
+        yaw - magnetometer heading), heading_age_s, heading_valid."""
+        return self._c.innovations()
+
+    def set_vibe_comp(self, on: bool) -> None:
+        """The altitude loop's vibration-resistant law (the vibration failsafe's action)."""
+        self._c.set_vibe_comp(bool(on))
+
     def reset(self) -> None:
         """Back to power-on state (disarmed, targets cleared); parameters kept."""
         self._c.reset()
@@ -275,6 +285,12 @@ class FlightCore:
         and the accelerometer's clip count (fc_sil/core/fc_vibe.h)."""
         x, y, z, clips, _samples = self._c.vibration()
         return x, y, z, clips
+
+    def battery(self) -> tuple:
+        """The latest BATTERY record the router kept (the bridge's pack): (count, sim_ns or -1,
+        voltage_v, current_a, consumed_mah, remaining, temperature_c, lowest_cell_v,
+        cell_count); fc_sil/battery.py reads it."""
+        return self._c.battery()
 
     def esc_reports(self) -> list[EscReport]:
         """The latest telemetry of each reporting ESC, motor order (fc_sil/core/fc_esc.h);

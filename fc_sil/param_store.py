@@ -111,6 +111,15 @@ class CoreParamStore:
     def values(self, names: Iterable[str]) -> dict[str, float]:
         return {n: self.get(n)[0] for n in names}
 
+    def set_param(self, name: str, value: float) -> float:
+        """FlightCore.set_param's surface, for timed changes made on the vehicle thread (a
+        scenario's [[fc_param]] and FC-side [[failure]] entries, param_schedule.py): the live
+        core at once, as without a vehicle, and this store too, so the vehicle's host
+        parameters and the GCS's view follow."""
+        stored = self._core.set_param(name, value)
+        self.set(name, stored)
+        return stored
+
     def set_many(self, values: dict[str, float]) -> list[str]:
         """Set several (start-up overrides); returns the refusals as messages."""
         problems = []

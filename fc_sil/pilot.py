@@ -34,11 +34,28 @@ class PilotInput:
         self.channels_us = [1500, 1500, 1000, 1500] + [1000] * (N_CHANNELS - 4)
         self.overridden = [False] * N_CHANNELS  # channel ever set by RC override
         self.rc = RcConfig()
+        self.lost = False                       # an injected RC loss (fault_inject.py)
+        self._had_input = False
+
+    def set_lost(self, lost: bool) -> None:
+        """An injected receiver loss: input stops arriving, so its age grows and the radio
+        failsafe sees what a real loss shows. A vehicle that never had pilot input counts its
+        silence from the loss (the receiver was there, now it is not); when the loss ends it
+        is back to never having had input."""
+        if lost and not self.lost:
+            self._had_input = self.t_s is not None
+            if self.t_s is None:
+                self.t_s = self.clock()
+        elif not lost and self.lost and not self._had_input:
+            self.t_s = None
+        self.lost = lost
 
     def configure(self, rc: RcConfig) -> None:
         self.rc = rc
 
     def manual_control(self, x: int, y: int, z: int, r: int) -> None:
+        if self.lost:
+            return
         # INT16_MAX marks an axis as unused (MAVLink): keep its last value
         if x != 32767:
             self.pitch = -_clamp(x / 1000.0, -1.0, 1.0)
@@ -52,6 +69,8 @@ class PilotInput:
         self.t_s = self.clock()
 
     def rc_override(self, channels_us) -> None:
+        if self.lost:
+            return
         for i, us in enumerate(channels_us[:len(self.channels_us)]):
             if us not in (0, 65535) and RC_MIN_US - 200 <= us <= RC_MAX_US + 200:
                 self.channels_us[i] = int(us)

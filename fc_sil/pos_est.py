@@ -10,6 +10,8 @@ A delayed-measurement complementary filter, per horizontal axis, run at the oute
   with the estimate stored for that instant (a short history), and the innovation corrects
   position (time constant SB_POS_TC), velocity (SB_VEL_TC) and the bias. The correction is
   added to the stored history as well, so the next fix is not corrected twice.
+* gate (gnss_gate.py, EKF3's rules): a fix whose innovation fails its test ratio is not
+  fused (a GNSS glitch); after the retry time the estimate resets to GNSS instead.
 
 Vertical: the C core's baro + accel filter (alt_est_m, climb_est_m_s, positive up above the
 arming point) is already the FC's vertical estimate; this module reports it in NED.
@@ -24,6 +26,8 @@ from __future__ import annotations
 import collections
 import math
 from dataclasses import dataclass
+
+from .gnss_gate import GnssGate
 
 EARTH_RADIUS_M = 6378137.0
 G_M_S2 = 9.80665
@@ -98,6 +102,8 @@ class PositionEstimator:
         self.last_fix_sim_ns: int | None = None
         self.last_fused_ns: int | None = None
         self.fixes_fused = 0
+        self.fixes_rejected = 0
+        self.gate = GnssGate()
         self._hist: collections.deque = collections.deque()   # (sim_ns, pn, pe, vn, ve)
 
     def configure(self, pos_tc_s: float, vel_tc_s: float, delay_s: float) -> None:
@@ -128,8 +134,10 @@ class PositionEstimator:
 
     # ---- correction ---------------------------------------------------------------------
 
-    def fuse_gnss(self, fix: dict) -> bool:
-        """Fuse a fix (FlightCore.gnss() dict); returns False for no 3D fix or a repeat."""
+    def fuse_gnss(self, fix: dict, vd_est_m_s: float | None = None) -> bool:
+        """Fuse a fix (FlightCore.gnss() dict); returns False for no 3D fix, a repeat or a fix
+        the gate rejected whole. vd_est_m_s: the vertical estimate's velocity (down), so the
+        velocity test covers three axes as EKF3's does."""
         t = int(fix["sim_ns"])
         if t == self.last_fix_sim_ns:
             return False
@@ -148,21 +156,36 @@ class PositionEstimator:
             self.valid = True
             self.last_fused_ns = t
             self.fixes_fused += 1
+            self.gate.start(t)
             return True
         past = self._state_at(t - int(self.delay_s * 1e9))
         dt_fix = 0.1 if self.last_fused_ns is None else \
             min(1.0, max(1e-3, (t - self.last_fused_ns) * 1e-9))
-        self.last_fused_ns = t
         e_p = (mn - past[0], me - past[1])
         e_v = (mvn - past[2], mve - past[3])
-        self.innov_pos_m = math.hypot(*e_p)         # EKF_STATUS_REPORT's test ratios
+        self.innov_pos_m = math.hypot(*e_p)
         self.innov_vel_m_s = math.hypot(*e_v)
         kp = min(1.0, dt_fix / self.pos_tc_s)
         kv = min(1.0, dt_fix / self.vel_tc_s)
+        e_v3 = e_v if vd_est_m_s is None else e_v + (fix["vel_ned_m_s"][2] - vd_est_m_s,)
+        a = self.acc_ned_m_s2
+        d = self.gate.test(t, e_p, e_v3, fix.get("eph_cm", 0) * 0.01,
+                           math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]), kp, kv)
+        if not (d.fuse_pos or d.fuse_vel or d.reset_pos or d.reset_vel):
+            self.fixes_rejected += 1
+            return False
+        self.last_fused_ns = t
+        kp = 1.0 if d.reset_pos else (kp * d.pos_scale if d.fuse_pos else 0.0)
+        kv = 1.0 if d.reset_vel else (kv * d.vel_scale if d.fuse_vel else 0.0)
         # bias learns ~10x slower than the velocity correction (keeps the loop well damped)
-        kb = min(1.0, dt_fix / (10.0 * self.vel_tc_s * self.vel_tc_s))
-        dp = (kp * e_p[0], kp * e_p[1])
-        dv = (kv * e_v[0], kv * e_v[1])
+        kb = 0.0 if not d.fuse_vel else \
+            min(1.0, dt_fix / (10.0 * self.vel_tc_s * self.vel_tc_s)) * d.vel_scale
+        self._correct((kp * e_p[0], kp * e_p[1]), (kv * e_v[0], kv * e_v[1]), kb, e_v)
+        self.fixes_fused += 1
+        return True
+
+    def _correct(self, dp, dv, kb: float, e_v) -> None:
+        """Shift the estimate and its history by (dp, dv); learn the bias from e_v."""
         self.pos_ne_m[0] += dp[0]
         self.pos_ne_m[1] += dp[1]
         self.vel_ne_m_s[0] += dv[0]
@@ -173,8 +196,11 @@ class PositionEstimator:
         self.acc_bias_ne_m_s2 = [max(-lim, min(lim, b)) for b in self.acc_bias_ne_m_s2]
         self._hist = collections.deque((s, pn + dp[0], pe + dp[1], vn + dv[0], ve + dv[1])
                                        for s, pn, pe, vn, ve in self._hist)
-        self.fixes_fused += 1
-        return True
+
+    def has_position(self, sim_ns: int) -> bool:
+        """An absolute horizontal position (EKF3 horiz_pos_abs): fixes were fused and GNSS
+        aiding has not timed out (gnss_gate.py)."""
+        return self.valid and self.gate.has_position(sim_ns)
 
     def _state_at(self, sim_ns: int) -> tuple[float, float, float, float]:
         best = None

@@ -76,30 +76,9 @@ def _sensor_bits(v) -> tuple[int, int, int]:
     return present, enabled, health
 
 
-# EKF_STATUS_REPORT: our estimator's state as EKF_* flags, and the GNSS innovations divided by
-# gates as ArduPilot's normalised test ratios (GNSS position 5 m, velocity 1 m/s, altitude
-# 10 m; below 1 = consistent).
-_GATE_POS_M, _GATE_VEL_M_S, _GATE_ALT_M = 5.0, 1.0, 10.0
-
-
 def _ekf_fields(v) -> dict:
-    flags = 0
-    if v.imu_run_s >= 1.0 and v.trust >= 0.5:
-        flags |= mav.EKF_ATTITUDE | mav.EKF_VELOCITY_VERT | mav.EKF_POS_VERT_ABS
-        if v.position_ok():
-            flags |= (mav.EKF_VELOCITY_HORIZ | mav.EKF_POS_HORIZ_REL | mav.EKF_POS_HORIZ_ABS
-                      | mav.EKF_PRED_POS_HORIZ_REL | mav.EKF_PRED_POS_HORIZ_ABS)
-        else:
-            flags |= mav.EKF_CONST_POS_MODE
-    else:
-        flags = mav.EKF_UNINITIALIZED
-    alt_err = 0.0
-    g = v.gnss
-    if g is not None and g["fix_type"] >= 3 and v.home_set:
-        alt_err = abs(g["alt_mm"] * 1e-3 - (v.alt_datum_msl_m + v.alt_m))
-    est = v.est
-    return dict(ekf_flags=flags, ekf_vel_var=est.innov_vel_m_s / _GATE_VEL_M_S,
-                ekf_pos_h_var=est.innov_pos_m / _GATE_POS_M, ekf_pos_v_var=alt_err / _GATE_ALT_M)
+    """EKF_STATUS_REPORT: flags and test ratios as EKF3 reports them (innov_ratios.py)."""
+    return v.failsafe.ratios.status_fields(v)
 
 
 def _pid_rows(v, st) -> tuple[PidTuningRow, ...]:
@@ -152,7 +131,9 @@ def build_snapshot(v) -> VehicleSnapshot:
     if g is not None:
         gvn, gve = g["vel_ned_m_s"][0], g["vel_ned_m_s"][1]
         gspd = math.hypot(gvn, gve)
-        gps = dict(gps_fix_type=int(g["fix_type"]), gps_sats=int(g["satellites"]),
+        # AP_GPS says NO_GPS (0) once its receiver has been silent GPS_TIMEOUT_MS (4 s)
+        fix_type = int(g["fix_type"]) if v.sim_ns - g["sim_ns"] <= 4_000_000_000 else 0
+        gps = dict(gps_fix_type=fix_type, gps_sats=int(g["satellites"]),
                    gps_lat_e7=int(g["lat_e7"]), gps_lon_e7=int(g["lon_e7"]),
                    gps_alt_msl_mm=int(g["alt_mm"]), gps_vel_cm_s=int(gspd * 100.0),
                    gps_cog_cdeg=(int(math.degrees(math.atan2(gve, gvn)) * 100.0) % 36000

@@ -9,7 +9,7 @@ time and at ``--speed X``. One step:
   GcsServer.service(): queued GCS requests run here, on this thread (the VehicleCommands
   methods below), so they never race the control loop;
   estimation: C core status (attitude, baro/accel altitude), position estimator (pos_est.py)
-  fed by the raw accelerometer mean and each new GNSS fix; battery model (battery.py);
+  fed by the raw accelerometer mean and each new GNSS fix; the bridge's battery (battery.py);
   failsafes (failsafe.py); the flight mode's outer loops (modes.py, mission_exec.py,
   nav_pos.py, nav_wp.py) -> the core's attitude / altitude / climb / throttle inputs;
   auto-disarm; a new VehicleSnapshot published to the server (snapshot.py).
@@ -37,8 +37,10 @@ from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 from . import modes as M
 from .autodec import AutoDeclination
-from .battery import BatteryModel
+from .battery import BatteryMonitor
 from .failsafe import FailsafeMonitor
+from .gnss_gate import GateConfig
+from .fault_inject import FaultInjector
 from .fence import Geofence
 from .mission_exec import MissionExecutor
 from .nav_config import NavConfig
@@ -79,10 +81,11 @@ class Vehicle(NavHelpers, GcsCommands):
         self.cfg = NavConfig.from_store(self.store.host)
         self._cfg_version = self.store.version
         self.est = PositionEstimator(self.cfg.pos_tc_s, self.cfg.vel_tc_s, self.cfg.gps_delay_s)
+        self.est.gate.configure(GateConfig.from_params(self.store.host))
         self.autodec = AutoDeclination()    # COMPASS_AUTODEC at the estimator origin
         self.pos_ctl = PosController(self.cfg.pos)
         self.wp = WaypointNav(self.cfg.wp)
-        self.battery = BatteryModel(self.cfg.battery, self.cfg.pwm_min_us, self.cfg.pwm_max_us)
+        self.battery = BatteryMonitor(self.cfg.battery)   # the bridge's pack (BATTERY records)
         self.failsafe = FailsafeMonitor()
         self.mission = MissionExecutor()
         self.pilot = PilotInput()
@@ -137,6 +140,10 @@ class Vehicle(NavHelpers, GcsCommands):
         self._rc_fs = False               # radio failsafe latched
         self.custom_version = _git_hash()
         self._load_window = (time.monotonic_ns(), 0, 0)    # (wall start, step ns, permille)
+        # Failure injection (fault_inject.py): MAV_CMD_INJECT_FAILURE, SIM_* parameters and a
+        # scenario's FC-side [[failure]] entries; set on the command line, SIM_* act at once.
+        self.faults = FaultInjector(self, self.statustext)
+        self._sync_sim_faults()
 
     # ============================================================================================
     # wiring
@@ -151,6 +158,8 @@ class Vehicle(NavHelpers, GcsCommands):
         if t < self._next_ns:
             return
         self.step(t)
+        if self.faults.outbox:      # switched faults, to the bridge beside the PWM
+            loop.push_records(self.faults.take_outbox())
 
     # ============================================================================================
     # the outer loop
@@ -162,6 +171,7 @@ class Vehicle(NavHelpers, GcsCommands):
         self.sim_ns = sim_ns
         self._next_ns = sim_ns - sim_ns % self.nav_period_ns + self.nav_period_ns
         self.steps += 1
+        self.faults.tick(sim_ns)
         self.store.apply()
         if self.store.version != self._cfg_version:
             self._reconfigure()
@@ -169,7 +179,7 @@ class Vehicle(NavHelpers, GcsCommands):
             self.server.service()
         self._read_core()
         self._estimate(dt_s)
-        self.battery.update(self.status["pwm_us"] if self.armed else (), dt_s)
+        self.battery.read(self.core)
         self.failsafe.check(self)
         self._radio_failsafe()
         self.fence.check(self)
@@ -189,11 +199,27 @@ class Vehicle(NavHelpers, GcsCommands):
         self.cfg = NavConfig.from_store(self.store.host)
         self.pos_ctl.g = self.cfg.pos
         self.wp.sp = self._wp_speeds(self.speed_override_m_s)
-        self.battery.configure(self.cfg.battery, self.cfg.pwm_min_us, self.cfg.pwm_max_us)
+        self.battery.configure(self.cfg.battery)
         self.est.configure(self.cfg.pos_tc_s, self.cfg.vel_tc_s, self.cfg.gps_delay_s)
+        self.est.gate.configure(GateConfig.from_params(self.store.host))
         self.fence.configure(self.store.host)
         self.rally.configure(self.store.host)
         self.pilot.configure(RcConfig.from_params(self.store.host))
+        self._sync_sim_faults()
+
+    # ---- failure injection: the FC-side links (fault_inject.py) ---------------------------------
+
+    def _sync_sim_faults(self) -> None:
+        g = self.gnss
+        lat_deg = g["lat_e7"] * 1e-7 if g is not None else 0.0
+        self.faults.sync_sim_params(self.store.host, lat_deg)
+
+    def rc_link_lost(self, lost: bool) -> None:
+        self.pilot.set_lost(lost)
+
+    def gcs_link_lost(self, lost: bool) -> None:
+        if self.server is not None:
+            self.server.set_link_lost(lost)
 
     def _read_core(self) -> None:
         st = self.core.status()
@@ -234,7 +260,7 @@ class Vehicle(NavHelpers, GcsCommands):
         fix = self.core.gnss()
         if fix is not None and fix["sim_ns"] != self.est.last_fix_sim_ns:
             self.gnss = fix
-            self.est.fuse_gnss(fix)
+            self.est.fuse_gnss(fix, -self.climb_m_s)
             o = self.est.origin
             if o is not None:     # COMPASS_AUTODEC: the value is set, not saved (ArduCopter)
                 dec = self.autodec.due(self.store.host("COMPASS_AUTODEC"), o.lat_e7, o.lon_e7)
@@ -286,9 +312,13 @@ class Vehicle(NavHelpers, GcsCommands):
         return alt_rel_m + self.home_up_m
 
     def position_ok(self) -> bool:
-        g = self.gnss
-        return (self.est.valid and g is not None and g["fix_type"] >= 3
-                and self.sim_ns - g["sim_ns"] <= self.cfg.gps_timeout_s * _NS)
+        """Copter::position_ok: an absolute position (the GNSS gate has not timed out,
+        gnss_gate.py) and no EKF failsafe (ekf_check.py)."""
+        return self.est.has_position(self.sim_ns) and not self.failsafe.ekf.failsafe
+
+    @property
+    def radio_failsafe_active(self) -> bool:
+        return self._rc_fs
 
     def gcs_silence_s(self) -> float | None:
         """Seconds since the last SYSID_MYGCS heartbeat; None without a server or GCS."""

@@ -133,6 +133,12 @@ class GcsCommands(GuidedCommands):
     def _outside_fence(self, ne, alt_m: float) -> bool:
         return not self.fence.destination_ok(self, ne, alt_m)
 
+    def inject_failure(self, failure_unit: int, failure_type: int, instance: int):
+        """MAV_CMD_INJECT_FAILURE as PX4 1.15 answers it (fault_inject.py, fault_map.py)."""
+        return self.faults.inject_failure(failure_unit, failure_type, instance,
+                                          self.store.host("SYS_FAILURE_EN") == 1,
+                                          self.store.host("SB_FI_GCS_S"))
+
     def manual_control(self, x, y, z, r, buttons) -> None:
         self.pilot.manual_control(x, y, z, r)
 

@@ -39,6 +39,8 @@ class Kind(enum.IntEnum):
     PWM = 7
     SETPOINT = 8
     ESC = 9
+    BATTERY = 10
+    FAULT = 11
 
 
 _HEADER = [
@@ -132,6 +134,27 @@ ESC_DTYPE = _record([
     ("consumption_mah", "<f4"),
 ])
 
+# The physics-side battery pack, as a smart battery reports it (see sb_battery in sb_records.h).
+BATTERY_DTYPE = _record([
+    ("voltage_v", "<f4"),
+    ("current_a", "<f4"),
+    ("consumed_mah", "<f4"),
+    ("remaining", "<f4"),
+    ("temperature_c", "<f4"),
+    ("lowest_cell_v", "<f4"),
+    ("cell_count", "u1"),
+])
+
+# A fault the FC switches on or off, forwarded to the bridge's fault engine (see sb_fault in
+# sb_records.h; codes and parameter slots: shm/fault_catalog.py).
+FAULT_DTYPE = _record([
+    ("action", "u1"),
+    ("unit", "u1"),
+    ("type", "u1"),
+    ("instance", "u1"),
+    ("params", "<f4", (9,)),
+])
+
 DTYPES: dict[Kind, np.dtype] = {
     Kind.IMU: IMU_DTYPE,
     Kind.BARO: BARO_DTYPE,
@@ -142,6 +165,8 @@ DTYPES: dict[Kind, np.dtype] = {
     Kind.PWM: PWM_DTYPE,
     Kind.SETPOINT: SETPOINT_DTYPE,
     Kind.ESC: ESC_DTYPE,
+    Kind.BATTERY: BATTERY_DTYPE,
+    Kind.FAULT: FAULT_DTYPE,
 }
 
 for _kind, _dt in DTYPES.items():
@@ -178,6 +203,8 @@ KIND_GT_NAV = int(Kind.GT_NAV)
 KIND_PWM = int(Kind.PWM)
 KIND_SETPOINT = int(Kind.SETPOINT)
 KIND_ESC = int(Kind.ESC)
+KIND_BATTERY = int(Kind.BATTERY)
+KIND_FAULT = int(Kind.FAULT)
 
 FLAGS_OFFSET = RECORD_DTYPE.fields["flags"][1]      # byte offset of the u16 flags in a slot
 HEADER_SIZE = RECORD_DTYPE.fields["payload"][1]     # bytes before the payload of every kind

@@ -258,6 +258,8 @@ static long write_imu(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t
     }
     sb_imu_scalar(&s->c.imu, af, w, in->omega_rad_s, s->phase_rad, stoch, s->injected_rad_s,
                   out);
+    if (s->faults.imu_on)
+        sb_faults_imu(&s->faults, out);
     s->state[ST_TEMP_C] = temp_c;
     header(r, SB_KIND_IMU, s->seq_imu++, sim_ns);
     for (int i = 0; i < 3; i++) {
@@ -353,6 +355,17 @@ static const double *start_sample(sb_lowrate *lr, size_t width, long done_flag,
     return n;
 }
 
+/* A due sample of a silent sensor (a fault): its schedule and noise run on as if it were
+ * written, so the stream after the fault is the fault-free run's; no record, no seq. */
+static long skip_sample(sb_lowrate *lr, long done_flag, long no_noise)
+{
+    if (lr->pos >= lr->rows)
+        return no_noise;
+    lr->next_ns = sb_due_ns(++lr->m, lr->rate_hz);
+    lr->pos++;
+    return lr->pos >= lr->rows ? done_flag : 0;
+}
+
 static long write_baro(sb_sensor_stage *s, const sb_fdm_sample *in, sb_record *r,
                        int64_t sim_ns)
 {
@@ -361,7 +374,9 @@ static long write_baro(sb_sensor_stage *s, const sb_fdm_sample *in, sb_record *r
         start_sample(&s->baro, 1, F_BARO_BLOCK_DONE, SB_KIND_BARO, r, sim_ns, &flags);
     if (n == NULL)
         return SB_STAGE_NO_BARO_NOISE;
-    const double pa = s->state[ST_BARO_PA] + s->baro_offset_pa + s->baro_noise_pa * n[0];
+    double pa = s->state[ST_BARO_PA] + s->baro_offset_pa + s->baro_noise_pa * n[0];
+    if (s->faults.baro.on)
+        pa = sb_faults_baro_pa(&s->faults.baro, pa, in->temperature_r / 1.8, sim_ns);
     r->u.baro.pressure_pa = (float)sb_quant_pressure_pa(pa);
     r->u.baro.temperature_c = (float)(in->temperature_r / 1.8 - 273.15);
     return flags;
@@ -435,7 +450,9 @@ long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t s
         flags |= f;
     }
     if (s->mag.on && sim_ns >= s->mag.next_ns) {
-        if ((f = write_mag(s, in, &slots[slot++], sim_ns)) < 0)
+        f = s->faults.mag_off ? skip_sample(&s->mag, F_MAG_BLOCK_DONE, SB_STAGE_NO_MAG_NOISE)
+                              : write_mag(s, in, &slots[slot++], sim_ns);
+        if (f < 0)
             return f;
         flags |= f;
     }

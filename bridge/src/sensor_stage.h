@@ -21,6 +21,7 @@
 #include "imu_chip.h"
 #include "imu_raw.h"
 #include "sb_records.h"
+#include "sensor_faults.h"
 #include "step_maths.h"
 #include "vibration.h"
 
@@ -156,6 +157,7 @@ typedef struct {
     double prev6[6];
     sb_imu_raw raw;           /* the chip's ODR samples for the log, when bound (imu_raw.h) */
     sb_held held;             /* records waiting for their release step */
+    sb_sensor_faults faults;  /* issue 28's sensor faults (all off: one test per sample) */
 } sb_sensor_stage;
 
 /* A defined stage: no noise yet, sensors off, counters at 0. */

@@ -227,7 +227,7 @@ PyObject *Kernel_run_batch(Kernel *self, PyObject *arg)
     sb_lockstep *l = &self->batch.ls;
     int64_t *io = l->io;
     io[SB_IO_TRACE_BYTES] = io[SB_IO_PENDING] = io[SB_IO_DONE] = 0;
-    io[SB_IO_FC_MISSED] = io[SB_IO_POLLS] = 0;
+    io[SB_IO_FC_MISSED] = io[SB_IO_POLLS] = io[SB_IO_OTHER_N] = 0;
     /* A step needs room for its records and the PWM of a poll (16: many per step). */
     const size_t step_bytes = (size_t)(self->n_slots + 16) * sizeof(sb_record);
     const Py_ssize_t rows = l->rotor != NULL ? (Py_ssize_t)l->rotor_rows : n;
@@ -235,7 +235,7 @@ PyObject *Kernel_run_batch(Kernel *self, PyObject *arg)
         const int rc = batch_step(self);
         if (rc < 0)
             return NULL;
-        if (rc == 0)
+        if (rc == 0 || io[SB_IO_OTHER_N] != 0)     /* a FAULT for Python before the next step */
             break;
     }
     return PyLong_FromLongLong(io[SB_IO_DONE]);

@@ -114,6 +114,13 @@ PyObject *Kernel_take_imu_raw(Kernel *self, PyObject *unused);
 PyObject *Kernel_set_forces(Kernel *self, PyObject *plan);
 int sb_step_apply_forces(Kernel *self, int64_t k);
 
+/* step_faults.c: issue 28's sensor faults and a damaged prop's vibration */
+PyObject *Kernel_set_imu_fault(Kernel *self, PyObject *args, PyObject *kwds);
+PyObject *Kernel_set_baro_fault(Kernel *self, PyObject *args, PyObject *kwds);
+PyObject *Kernel_set_mag_fault(Kernel *self, PyObject *args, PyObject *kwds);
+PyObject *Kernel_set_fault_seed(Kernel *self, PyObject *arg);
+PyObject *Kernel_set_imbalance_scale(Kernel *self, PyObject *args);
+
 /* step_json.c: the module-level json_reply (ArduPilot SITL's JSON state line). */
 extern PyMethodDef sb_step_json_methods[];
 

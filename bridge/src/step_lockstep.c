@@ -63,6 +63,25 @@ void sb_lockstep_after_step(sb_lockstep *l, const double *state, int64_t k, int6
         memcpy(l->rotor + 4 * row, state + ST_OMEGA, 4 * sizeof *l->rotor);
 }
 
+/* Records of another kind than PWM in a collection (the FC's FAULT records): moved behind the
+ * PWM records, order kept, for Python to route (bridge/fault_records.py) before the next step.
+ * Returns the PWM records left in front. Rare: a fault switch, not a step. */
+static uint64_t set_others_aside(sb_lockstep *l, sb_record *r, uint64_t n, size_t cap)
+{
+    sb_record *aside = r + n;   /* the pwm buffer's room past this collection */
+    uint64_t m = 0, k = 0;
+    for (uint64_t i = 0; i < n; i++) {
+        if (r[i].h.kind == SB_KIND_PWM)
+            r[m++] = r[i];
+        else if (n + k < cap)
+            aside[k++] = r[i];
+    }
+    memmove(r + m, aside, k * sizeof *r);
+    l->io[SB_IO_OTHER_AT] = (int64_t)m;
+    l->io[SB_IO_OTHER_N] = (int64_t)k;
+    return m;
+}
+
 /* At most as many records as the trace has room for: a lockstep poll answers one step. */
 void sb_lockstep_collect(sb_lockstep *l)
 {
@@ -70,7 +89,16 @@ void sb_lockstep_collect(sb_lockstep *l)
     const size_t room = sb_lockstep_room(l) / sizeof(sb_record);
     const size_t cap = l->pwm_cap < room ? l->pwm_cap : room;
     sb_record *pwm = l->pwm;
-    const uint64_t n = sb_ring_pop_batch(&l->api->rings[SB_RING_ACTUATORS], pwm, cap);
+    /* half the buffer at most: the other half is where set_others_aside sorts */
+    uint64_t n = sb_ring_pop_batch(&l->api->rings[SB_RING_ACTUATORS], pwm,
+                                   cap < l->pwm_cap / 2 ? cap : l->pwm_cap / 2);
+    if (n == 0)
+        return;
+    uint64_t other = 0;
+    for (uint64_t i = 0; i < n; i++)
+        other += pwm[i].h.kind != SB_KIND_PWM;
+    if (other != 0)
+        n = set_others_aside(l, pwm, n, l->pwm_cap);
     if (n == 0)
         return;
     const sb_record *last = &pwm[n - 1];

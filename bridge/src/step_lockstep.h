@@ -36,7 +36,9 @@ enum {
     SB_IO_ERR_EVERY = 16,     /* the summary errors are sampled every this many steps */
     SB_IO_ERR_FROM_NS = 17,   /*   from this sim time (the settle time) on */
     SB_IO_ERR_N = 18,         /*   samples taken (BridgeLoop._n_err) */
-    SB_IO_WORDS = 19
+    SB_IO_OTHER_AT = 19,      /* the last collection's non-PWM records (FAULT): first slot */
+    SB_IO_OTHER_N = 20,       /*   and count, in the pwm buffer; nonzero ends the batch */
+    SB_IO_WORDS = 21
 };
 
 /* The summary errors' sums and what they are taken against (BridgeLoop._sample_errors),

@@ -300,6 +300,19 @@ static PyMethodDef Kernel_methods[] = {
      "run_batch(n) -> steps done: up to n lockstep steps of bridge and in-process FC"},
     {"finish_step", (PyCFunction)Kernel_finish_step, METH_O,
      "finish_step(count) -> steps done: the step run_batch left to Python, finished"},
+    {"set_imu_fault", (PyCFunction)(void (*)(void))Kernel_set_imu_fault,
+     METH_VARARGS | METH_KEYWORDS,
+     "set_imu_fault(sensor, stuck, bias, sigma, clip): the gyro's or accel's faults"},
+    {"set_baro_fault", (PyCFunction)(void (*)(void))Kernel_set_baro_fault,
+     METH_VARARGS | METH_KEYWORDS,
+     "set_baro_fault(stuck, offset_m, drift_m_s): the baro's faults as altitude errors"},
+    {"set_mag_fault", (PyCFunction)(void (*)(void))Kernel_set_mag_fault,
+     METH_VARARGS | METH_KEYWORDS,
+     "set_mag_fault(off, offset_gauss): the magnetometer silent, its offset"},
+    {"set_fault_seed", (PyCFunction)Kernel_set_fault_seed, METH_O,
+     "set_fault_seed(seed): the noisy-axis faults' generator"},
+    {"set_imbalance_scale", (PyCFunction)Kernel_set_imbalance_scale, METH_VARARGS,
+     "set_imbalance_scale(motor 0..3, scale): a damaged prop's vibration"},
     {NULL, NULL, 0, NULL}};
 
 static PyTypeObject KernelType = {
@@ -372,6 +385,7 @@ PyMODINIT_FUNC PyInit__step(void)
         {"IO_FC_MISSED", SB_IO_FC_MISSED}, {"IO_POLLS", SB_IO_POLLS},
         {"IO_LAST_POLL", SB_IO_LAST_POLL}, {"IO_ERR_EVERY", SB_IO_ERR_EVERY},
         {"IO_ERR_FROM_NS", SB_IO_ERR_FROM_NS}, {"IO_ERR_N", SB_IO_ERR_N},
+        {"IO_OTHER_AT", SB_IO_OTHER_AT}, {"IO_OTHER_N", SB_IO_OTHER_N},
         {"ERR_ATT_SQ", SB_ERR_ATT_SQ}, {"ERR_ALT_SQ", SB_ERR_ALT_SQ},
         {"ERR_CMD_ROLL", SB_ERR_CMD_ROLL}, {"ERR_CMD_PITCH", SB_ERR_CMD_PITCH},
         {"ERR_CMD_ALT", SB_ERR_CMD_ALT}, {"ERR_HOME_AGL", SB_ERR_HOME_AGL},

@@ -7,6 +7,11 @@
  * The acceleration PID works in ArduCopter's units: error in cm/s^2, output in
  * thousandths of throttle. Its integrator may not grow further into a mixer
  * throttle limit. A direct-throttle mode (for STABILIZE) bypasses it all.
+ * Vibration compensation (ArduCopter AC_PosControl::get_throttle_with_vibration_override,
+ * switched by the vibration failsafe): the measured acceleration is what vibration corrupts,
+ * so the acceleration PID is replaced by a feed-forward of the acceleration target
+ * (FC_ALT_VIBE_P_GAIN of the hover throttle per g) and an integrator of the climb-rate error
+ * (FC_ALT_VIBE_I_GAIN), which keeps the accel integrator's state.
  * Units: up-positive, as fc_alt_est.
  */
 #ifndef FC_ALT_CTRL_H
@@ -48,9 +53,11 @@ void fc_alt_ctrl_init(fc_alt_ctrl_t *c, const fc_alt_ctrl_config_t *cfg, float d
 void fc_alt_ctrl_configure(fc_alt_ctrl_t *c, const fc_alt_ctrl_config_t *cfg, float dt_s);
 void fc_alt_ctrl_reset(fc_alt_ctrl_t *c);
 /* One step; returns throttle 0..1. `target` is m (ALTITUDE), m/s (CLIMB) or
- * 0..1 (THROTTLE). limit_up/limit_dn: the mixer clipped throttle high/low. */
+ * 0..1 (THROTTLE). limit_up/limit_dn: the mixer clipped throttle high/low. vibe_comp: the
+ * vibration-resistant law. */
 float fc_alt_ctrl_update(fc_alt_ctrl_t *c, const fc_alt_ctrl_config_t *cfg, int mode,
                          float target, float alt_m, float climb_m_s, float accel_up_m_s2,
-                         float cos_tilt, bool limit_up, bool limit_dn, float dt_s);
+                         float cos_tilt, bool limit_up, bool limit_dn, bool vibe_comp,
+                         float dt_s);
 
 #endif /* FC_ALT_CTRL_H */

@@ -253,7 +253,8 @@ void fc_control_throttle_step(fc_control_state_t *s, const fc_control_config_t *
         const float thr = fc_alt_ctrl_update(&s->alt_ctrl, &cfg->alt, mode, target, vs->alt_m,
                                              vs->climb_m_s, vs->accel_up_m_s2, vs->cos_tilt,
                                              (sat & FC_SAT_THR_HIGH) != 0,
-                                             (sat & FC_SAT_THR_LOW) != 0, dt_s);
+                                             (sat & FC_SAT_THR_LOW) != 0,
+                                             in->cmd.vibe_comp != 0, dt_s);
         out->throttle_us = cfg->pwm_min_us + thr * range_us;
         if (s->sysid.active && s->sysid.axis == FC_SID_MIX_THROTTLE) {
             out->throttle_us += s->sysid.sample * range_us;

@@ -98,6 +98,8 @@ typedef struct fc_gnss_store {
     int64_t sim_ns;
     int32_t lat_e7, lon_e7, alt_mm;
     float vel_ned_m_s[3];
+    uint16_t eph_cm;         /* reported horizontal accuracy [cm] (failsafe test ratios) */
+    uint16_t epv_cm;         /* reported vertical accuracy [cm] */
     uint8_t fix_type;
     uint8_t satellites;
     bool valid;
@@ -165,6 +167,8 @@ fc_status_t fc_core_set_yaw_rate_target(fc_core_t *c, float yaw_rate_rad_s);
 fc_status_t fc_core_set_altitude_target(fc_core_t *c, float alt_m);
 fc_status_t fc_core_set_climb_target(fc_core_t *c, float climb_m_s);
 fc_status_t fc_core_set_throttle(fc_core_t *c, float throttle);
+/* The vibration failsafe's switch: the altitude loop's vibration-resistant law (fc_alt_ctrl.h). */
+void fc_core_set_vibe_comp(fc_core_t *c, bool on);
 /* Optional kinematic acceleration reference for the estimator, NED [m/s^2]
  * (e.g. from GNSS velocity); see fc_mahony.h. Expires after 0.5 s. */
 fc_status_t fc_core_set_accel_ref(fc_core_t *c, const float accel_ned_m_s2[3]);

@@ -64,6 +64,11 @@ fc_status_t fc_core_set_climb_target(fc_core_t *c, float climb_m_s)
     return FC_OK;
 }
 
+void fc_core_set_vibe_comp(fc_core_t *c, bool on)
+{
+    c->in.vibe_comp = on ? 1u : 0u;
+}
+
 fc_status_t fc_core_set_throttle(fc_core_t *c, float throttle)
 {
     if (!fc_finitef(throttle)) {

@@ -12,6 +12,7 @@ typedef struct fc_core_inputs {
     uint8_t armed;
     uint8_t yaw_hold;        /* 1: yaw angle target; 0: yaw rate target */
     uint8_t alt_mode;        /* fc_alt_mode_t */
+    uint8_t vibe_comp;       /* 1: the altitude loop's vibration-resistant law (FS_VIBE_ENABLE) */
     float roll_target_rad;
     float pitch_target_rad;
     float yaw_target_rad;

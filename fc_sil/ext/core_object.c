@@ -101,6 +101,16 @@ static PyObject *Core_set_armed(CoreObject *self, PyObject *args)
     Py_RETURN_NONE;
 }
 
+static PyObject *Core_set_vibe_comp(CoreObject *self, PyObject *args)
+{
+    int on;
+    if (!PyArg_ParseTuple(args, "p", &on)) {
+        return NULL;
+    }
+    fc_core_set_vibe_comp(&self->core, on != 0);
+    Py_RETURN_NONE;
+}
+
 static PyObject *Core_set_attitude_target(CoreObject *self, PyObject *args)
 {
     double r, p;
@@ -155,6 +165,8 @@ PyMethodDef fc_ext_object_methods[] = {
      "set_climb_target(m_s) -> status."},
     {"set_throttle", (PyCFunction)Core_set_throttle, METH_VARARGS,
      "set_throttle(0..1) -> status (direct throttle)."},
+    {"set_vibe_comp", (PyCFunction)Core_set_vibe_comp, METH_VARARGS,
+     "set_vibe_comp(bool): the altitude loop's vibration-resistant law on/off."},
     {"set_accel_ref", (PyCFunction)Core_set_accel_ref, METH_VARARGS,
      "set_accel_ref((ax, ay, az) NED m/s^2) -> status (estimator acceleration reference)."},
     {NULL, NULL, 0, NULL},

@@ -61,6 +61,8 @@ typedef struct CoreObject {
     int ignore_setpoints;   /* MAVLink control: scenario SETPOINT records are skipped */
     uint64_t setpoints_ignored;
     int64_t last_kind_ns[16]; /* sim time of the last record of each kind (-1: never) */
+    sb_battery battery;       /* the latest BATTERY record's payload (the physics-side pack) */
+    uint32_t battery_count;   /* BATTERY records consumed */
     double accel_sum[3];      /* raw IMU accel summed since take_accel_mean() [m/s^2] */
     uint32_t accel_n;
     /* bind_batch(): the poll loop's record, PWM and status arrays, held so step_bound(n)

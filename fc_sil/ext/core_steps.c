@@ -94,7 +94,7 @@ static PyObject *Core_inputs(CoreObject *self, PyObject *noargs)
 {
     (void)noargs;
     const fc_core_inputs_t *in = &self->core.in;
-    return Py_BuildValue("{s:O,s:O,s:i,s:d,s:d,s:d,s:d,s:d,s:d,s:d}", "armed",
+    return Py_BuildValue("{s:O,s:O,s:i,s:d,s:d,s:d,s:d,s:d,s:d,s:d,s:O}", "armed",
                          in->armed ? Py_True : Py_False, "yaw_hold",
                          in->yaw_hold ? Py_True : Py_False, "alt_mode", (int)in->alt_mode,
                          "roll_target_rad", (double)in->roll_target_rad, "pitch_target_rad",
@@ -102,7 +102,8 @@ static PyObject *Core_inputs(CoreObject *self, PyObject *noargs)
                          (double)in->yaw_target_rad, "yaw_rate_target_rad_s",
                          (double)in->yaw_rate_target_rad_s, "alt_target_m",
                          (double)in->alt_target_m, "climb_target_m_s",
-                         (double)in->climb_target_m_s, "throttle", (double)in->throttle);
+                         (double)in->climb_target_m_s, "throttle", (double)in->throttle,
+                         "vibe_comp", in->vibe_comp ? Py_True : Py_False);
 }
 
 static PyObject *Core_counters(CoreObject *self, PyObject *noargs)
@@ -132,11 +133,28 @@ static PyObject *Core_gnss(CoreObject *self, PyObject *noargs)
     if (!g->valid) {
         Py_RETURN_NONE;
     }
-    return Py_BuildValue("{s:L,s:i,s:i,s:i,s:(ddd),s:i,s:i}", "sim_ns", (long long)g->sim_ns,
-                         "lat_e7", g->lat_e7, "lon_e7", g->lon_e7, "alt_mm", g->alt_mm,
-                         "vel_ned_m_s", (double)g->vel_ned_m_s[0], (double)g->vel_ned_m_s[1],
-                         (double)g->vel_ned_m_s[2], "fix_type", (int)g->fix_type, "satellites",
-                         (int)g->satellites);
+    return Py_BuildValue("{s:L,s:i,s:i,s:i,s:(ddd),s:i,s:i,s:i,s:i}", "sim_ns",
+                         (long long)g->sim_ns, "lat_e7", g->lat_e7, "lon_e7", g->lon_e7,
+                         "alt_mm", g->alt_mm, "vel_ned_m_s", (double)g->vel_ned_m_s[0],
+                         (double)g->vel_ned_m_s[1], (double)g->vel_ned_m_s[2], "fix_type",
+                         (int)g->fix_type, "satellites", (int)g->satellites, "eph_cm",
+                         (int)g->eph_cm, "epv_cm", (int)g->epv_cm);
+}
+
+/* The estimators' latest measurement innovations, read-only, for the failsafes' test ratios
+ * (fc_sil/innovations.py): baro against the vertical filter, magnetometer heading against the
+ * attitude estimate. */
+static PyObject *Core_innovations(CoreObject *self, PyObject *noargs)
+{
+    (void)noargs;
+    const fc_core_t *c = &self->core;
+    return Py_BuildValue("{s:d,s:d,s:O,s:d,s:d,s:O,s:L}", "heading_err_rad",
+                         (double)c->ahrs.heading_err_rad, "heading_age_s",
+                         (double)c->ahrs.heading_age_s, "heading_valid",
+                         c->ahrs.heading_valid ? Py_True : Py_False, "baro_innov_m",
+                         (double)c->alt_est.innov_m, "baro_alt_m", (double)c->alt_est.baro_alt_m,
+                         "have_baro", c->alt_est.have_baro ? Py_True : Py_False, "last_baro_ns",
+                         (long long)c->alt_est.last_baro_ns);
 }
 
 /* Sensor-stream health for the host (pre-arm checks, failsafes). */
@@ -180,6 +198,8 @@ PyMethodDef fc_ext_step_methods[] = {
     {"inputs", (PyCFunction)Core_inputs, METH_NOARGS, "Current inputs as a dict."},
     {"counters", (PyCFunction)Core_counters, METH_NOARGS, "Step counters."},
     {"gnss", (PyCFunction)Core_gnss, METH_NOARGS, "Last GNSS fix or None."},
+    {"innovations", (PyCFunction)Core_innovations, METH_NOARGS,
+     "Latest baro and magnetometer-heading innovations (read-only)."},
     {"last_seen", (PyCFunction)Core_last_seen, METH_NOARGS,
      "Sim time [ns] of the last record of each kind 0..15 (-1: never)."},
     {"take_accel_mean", (PyCFunction)Core_take_accel_mean, METH_NOARGS,

@@ -1,7 +1,8 @@
 /*
  * core_telem.c - Core methods that read what two ground-station messages carry: the
  * accelerometer vibration levels and clip counts (fc_vibe.h, VIBRATION) and the latest
- * report of each ESC (fc_esc.h, ESC_TELEMETRY_1_TO_4). Conversion only.
+ * report of each ESC (fc_esc.h, ESC_TELEMETRY_1_TO_4), and the latest BATTERY record (the
+ * physics-side pack: SYS_STATUS, BATTERY_STATUS, the battery failsafe). Conversion only.
  */
 #include "core_object.h"
 
@@ -39,6 +40,18 @@ static PyObject *Core_esc_reports(CoreObject *self, PyObject *Py_UNUSED(unused))
                          (int)e->motor_count, rows);
 }
 
+/* battery() -> (count, sim_ns or -1, voltage_v, current_a, consumed_mah, remaining,
+ * temperature_c, lowest_cell_v, cell_count): the latest BATTERY record. */
+static PyObject *Core_battery(CoreObject *self, PyObject *Py_UNUSED(unused))
+{
+    const sb_battery *b = &self->battery;
+    return Py_BuildValue("(kLddddddi)", (unsigned long)self->battery_count,
+                         (long long)(self->battery_count ? self->last_kind_ns[SB_KIND_BATTERY] : -1),
+                         (double)b->voltage_v, (double)b->current_a, (double)b->consumed_mah,
+                         (double)b->remaining, (double)b->temperature_c,
+                         (double)b->lowest_cell_v, (int)b->cell_count);
+}
+
 PyMethodDef fc_ext_telem_methods[] = {
     {"vibration", (PyCFunction)Core_vibration, METH_NOARGS,
      "vibration() -> (vibe_x, vibe_y, vibe_z [m/s^2], clip_count, samples): ArduPilot's "
@@ -47,5 +60,8 @@ PyMethodDef fc_ext_telem_methods[] = {
      "esc_reports() -> (reports, rejected, motor_count, rows): the latest telemetry of each "
      "ESC slot (fc_esc.h); a row is (sim_ns or -1, rpm, voltage_v, current_a, temperature_c, "
      "consumption_mah, count)."},
+    {"battery", (PyCFunction)Core_battery, METH_NOARGS,
+     "battery() -> (count, sim_ns or -1, voltage_v, current_a, consumed_mah, remaining, "
+     "temperature_c, lowest_cell_v, cell_count): the latest BATTERY record (the bridge's pack)."},
     {NULL, NULL, 0, NULL},
 };

@@ -116,6 +116,8 @@ static void consume_gnss(fc_core_t *c, const sb_record *r)
     g.lon_e7 = r->u.gnss.lon_e7;
     g.alt_mm = r->u.gnss.alt_mm;
     memcpy(g.vel_ned_m_s, r->u.gnss.vel_ned_m_s, sizeof g.vel_ned_m_s);
+    g.eph_cm = r->u.gnss.eph_cm;
+    g.epv_cm = r->u.gnss.epv_cm;
     g.fix_type = r->u.gnss.fix_type;
     g.satellites = r->u.gnss.satellites;
     (void)fc_core_gnss_step(c, &g);
@@ -170,6 +172,12 @@ Py_ssize_t fc_ext_run_records(CoreObject *self, const unsigned char *base, Py_ss
             (void)fc_core_esc_step(c, r.h.sim_ns, r.u.esc.motor, r.u.esc.motor_count, v);
             break;
         }
+        case SB_KIND_BATTERY:
+            /* The physics-side pack: kept for the supervisor's battery reader and failsafes
+             * (fc_sil/battery.py, Core.battery()); nothing in the C core reads it. */
+            self->battery = r.u.battery;
+            self->battery_count++;
+            break;
         case SB_KIND_SETPOINT:
             /* Under MAVLink control the GCS alone commands the vehicle (fc_sil/vehicle.py). */
             if (self->ignore_setpoints) {

@@ -150,6 +150,9 @@ class CommandPlanner:
             return self.srv.set_message_interval(link, _int_or(req.p1, -1), req.p2)
         if c == mav.MAV_CMD_GET_MESSAGE_INTERVAL:
             return self.srv.message_interval(link, _int_or(req.p1, -1))
+        if c == mav.MAV_CMD_INJECT_FAILURE:     # PX4's: p1 FAILURE_UNIT, p2 FAILURE_TYPE, p3 instance
+            return Call("inject_failure", (_int_or(req.p1, -1), _int_or(req.p2, -1),
+                                           _int_or(req.p3, 0)))
         if c == mav.MAV_CMD_PREFLIGHT_STORAGE:
             return self.srv.storage(_int_or(req.p1, -1))
         return Immediate(mav.MAV_RESULT_UNSUPPORTED)

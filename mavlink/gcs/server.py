@@ -149,6 +149,8 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
         self.stats = collections.Counter()
         # mavlink.tlog.TlogWriter or None: both directions of the GCS traffic (--tlog).
         self.tlog = None
+        # An injected GCS link loss (fc_sil/fault_inject.py): nothing heard, nothing sent.
+        self._link_lost = False
 
     # ============================================================================================
     # API for the vehicle thread and for anyone
@@ -165,6 +167,18 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
         """Since the last HEARTBEAT from system SYSID_MYGCS (inf if never): GCS failsafe input."""
         t = self._gcs_heartbeat_s
         return float("inf") if t is None else time.monotonic() - t
+
+    def set_link_lost(self, lost: bool) -> None:
+        """An injected loss of the GCS link (vehicle thread): queued in order with the
+        STATUSTEXTs, after the command replies already posted (the injecting command's ACK),
+        every message in is dropped unread and nothing goes out, until set_link_lost(False);
+        what is queued after that goes out."""
+        self._outbox.append(("link_lost", bool(lost)))
+        self._wake()
+
+    @property
+    def link_lost(self) -> bool:
+        return self._link_lost
 
     def send_statustext(self, severity: int, text: str) -> None:
         self._outbox.append(("statustext", int(severity), str(text)))
@@ -280,6 +294,9 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
                     self._add_link(client)
             else:
                 for msg in r.receive():
+                    if self._link_lost:
+                        self.stats["rx_link_lost"] += 1
+                        continue
                     if self.tlog is not None:
                         self.tlog.message(msg)
                     self._dispatch(r, msg, now)
@@ -353,6 +370,9 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
 
     # -- output side used by the protocol handlers ----------------------------------------------------
     def send(self, link: Link, msg, *, to_tlog: bool = True) -> None:
+        if self._link_lost:
+            self.stats["tx_link_lost"] += 1
+            return
         try:
             link.send(msg)
         except (struct.error, ValueError, TypeError, OverflowError):

@@ -119,3 +119,6 @@ class TelemetrySender:
                 self.statustext(item[1], item[2])
             elif item[0] == "reached":
                 self.broadcast(mav.MAVLink_mission_item_reached_message(item[1]))
+            elif item[0] == "link_lost":    # in order with the STATUSTEXTs (server.py)
+                self.pending.take_replies()     # an ACK posted before it goes out first
+                self._link_lost = item[1]

@@ -32,6 +32,7 @@ from silbridge.shm.records import RECORD_DTYPE, RECORD_SIZE
 from silbridge.mavlink.hil.hil_channel import HilListener, make_codec
 from silbridge.mavlink.hil.hil_codec import SensorEncoder
 from silbridge.mavlink.hil.hil_errors import HilPeerLost
+from silbridge.mavlink.hil import hil_fault
 from silbridge.mavlink.hil.hil_pwm import PwmDecoder
 
 BRIDGE_SYSID = 1
@@ -128,6 +129,8 @@ class HilBridgeEnd:
         self._rx_msgs = 0
         self._last_beat = 0.0
         self._contact = False
+        self.faults_received = 0
+        self.faults_malformed = 0       # COMMAND_LONGs of hil_fault.py that were not sane
 
     # -- the peer ---------------------------------------------------------------------------
     def set_origin(self, lat_e7: int, lon_e7: int, alt_mm: int) -> None:
@@ -208,6 +211,13 @@ class HilBridgeEnd:
                 self.words[ls.FC_STATE] = value
             elif name == "SB_FCSTOP":
                 self.words[ls.FC_STOP] = value
+        elif mid == 76 and m.command == hil_fault.COMMAND:     # COMMAND_LONG: a FAULT
+            rec = hil_fault.decode(m, self.faults_received, self.words[ls.FC_SIM_NS], now_ns)
+            if rec is None:
+                self.faults_malformed += 1
+            else:
+                self.actuators.queue.append(rec)    # beside the PWM, as in the shm ring
+                self.faults_received += 1
         elif mid == 0:         # HEARTBEAT
             if not self._silbridge_fc and self.words[ls.FC_STATE] == ls.FC_STATE_NONE:
                 self.words[ls.FC_STATE] = ls.FC_STATE_READY
@@ -257,7 +267,8 @@ class HilBridgeEnd:
 
     def counters(self) -> dict:
         ch = self.channel
-        out = {"messages_sent": self.encoder.messages, "pwm_lost": self.pwm_decoder.lost}
+        out = {"messages_sent": self.encoder.messages, "pwm_lost": self.pwm_decoder.lost,
+               "faults_received": self.faults_received, "faults_malformed": self.faults_malformed}
         if ch is not None:
             out.update(ch.rx.as_dict())
             out.update(tx_frames=ch.tx_frames, tx_bytes=ch.tx_bytes, tx_dropped=ch.tx_dropped)

@@ -9,10 +9,12 @@ Per physics step the bridge sends, in this order:
   HIL_SENSOR x n    one per IMU sample, time_usec = the sample's time; the step's BARO / MAG
                     ride on the last one (fields_updated bits 9 and 12 / 6-8; a step with no
                     IMU sample sends one HIL_SENSOR with only those bits), `id` = 0
+  BATTERY_STATUS                                        when it has a BATTERY record
+                                                        (the pack, 10 Hz; hil_battery.py)
   ESC_TELEMETRY_1_TO_4 (and _5_TO_8)                    when it has ESC records (see below)
   HIL_STATE_QUATERNION  ground truth (GT_ATT + GT_NAV); closes the step (STEP_END)
 The decoder rebuilds the step in the contract's order (IMU..., GT_ATT, GT_NAV, BARO, MAG, GNSS,
-SETPOINT, ESC...), numbers each kind from 0 as the bridge does, and flags the last record
+SETPOINT, BATTERY, ESC...), numbers each kind from 0 as the bridge does, and flags the last record
 STEP_END.
 
 ESC telemetry rides in ArduPilot's ESC_TELEMETRY_1_TO_4 (#11030, motors 1-4; _5_TO_8 for 5-8):
@@ -55,6 +57,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.shm.records import (
     BARO_DTYPE,
+    BATTERY_DTYPE,
     ESC_DTYPE,
     FLAG_STEP_END,
     FLAGS_OFFSET,
@@ -63,6 +66,7 @@ from silbridge.shm.records import (
     GT_NAV_DTYPE,
     IMU_DTYPE,
     KIND_BARO,
+    KIND_BATTERY,
     KIND_ESC,
     KIND_GNSS,
     KIND_GT_ATT,
@@ -76,6 +80,7 @@ from silbridge.shm.records import (
     record_struct,
 )
 
+from silbridge.mavlink.hil import hil_battery
 from silbridge.mavlink.hil.hil_errors import HilInputError
 from silbridge.mavlink.v2_frames import V2Frames
 from silbridge.shm.records import NS_PER_S as _NS
@@ -105,7 +110,8 @@ MAV_FRAME_LOCAL_NED = 1
 
 # The records of one step other than IMU samples, by kind: the view that reads each.
 _STEP_VIEWS = {KIND_BARO: BARO_DTYPE, KIND_MAG: MAG_DTYPE, KIND_GNSS: GNSS_DTYPE,
-               KIND_SETPOINT: SETPOINT_DTYPE, KIND_GT_ATT: GT_ATT_DTYPE, KIND_GT_NAV: GT_NAV_DTYPE}
+               KIND_SETPOINT: SETPOINT_DTYPE, KIND_GT_ATT: GT_ATT_DTYPE, KIND_GT_NAV: GT_NAV_DTYPE,
+               KIND_BATTERY: BATTERY_DTYPE}
 
 # Whole 64-byte slots, packed field by field in slot order (shm/records.py declares them).
 _S_IMU, _S_BARO, _S_MAG, _S_GNSS, _S_GT_ATT, _S_GT_NAV, _S_SETPOINT = (record_struct(k) for k in (
@@ -123,10 +129,11 @@ _ESC_MSGS = {0: mav.MAVLink_esc_telemetry_1_to_4_message,
              4: mav.MAVLink_esc_telemetry_5_to_8_message}
 _ID_ESC_FIRST = {cls.id: first for first, cls in _ESC_MSGS.items()}
 _S_ESC = record_struct(Kind.ESC)
+_S_BATTERY = hil_battery.SLOT
 # Every message id SensorDecoder.feed consumes (the FC end routes these to it).
 DECODED_IDS = frozenset({_ID_HIL_SENSOR, _ID_HIL_STATE_QUATERNION, _ID_HIL_GPS,
                          _ID_SET_ATTITUDE_TARGET, _ID_SET_POSITION_TARGET_LOCAL_NED,
-                         *_ID_ESC_FIRST})
+                         *_ID_ESC_FIRST, hil_battery.ID_BATTERY_STATUS})
 _U16 = 65535
 
 
@@ -220,8 +227,14 @@ class SensorEncoder:
                                           hi))
             n += last + 1
         elif baro is not None or mag is not None:
-            out.append(self._sensor_frame(step_us, (0.0,) * 3, (0.0,) * 3, 0.0, 0, baro, mag,
+            # Stamped with their own time: a link fault may deliver them steps late.
+            t_us = max(int(r["sim_ns"]) for r in (baro, mag) if r is not None) // 1000
+            out.append(self._sensor_frame(t_us, (0.0,) * 3, (0.0,) * 3, 0.0, 0, baro, mag,
                                           lo, hi))
+            n += 1
+        batt = found.get(KIND_BATTERY)
+        if batt is not None:
+            out.append(hil_battery.battery_frame(batt, self.codec))
             n += 1
         esc_idx = np.flatnonzero(kinds == KIND_ESC)
         if len(esc_idx):
@@ -346,6 +359,7 @@ class SensorDecoder:
         self._att_sp = None
         self._pos_sp = None
         self._esc: list = []        # ESC_TELEMETRY_* messages of the step being rebuilt
+        self._battery = None        # the step's BATTERY_STATUS (hil_battery.py)
         self._temp_c = 0.0
         self._wall = 0
 
@@ -369,6 +383,8 @@ class SensorDecoder:
             self._pos_sp = msg
         elif mid in _ID_ESC_FIRST:
             self._esc.append(msg)
+        elif mid == hil_battery.ID_BATTERY_STATUS:
+            self._battery = msg
         return b""
 
     def _reject(self, why: str):
@@ -447,6 +463,10 @@ class SensorDecoder:
             self._gnss = None
         if self._att_sp is not None or self._pos_sp is not None:
             out.append(self._setpoint_record(step_ns, wall))
+        if self._battery is not None:
+            out.append(hil_battery.battery_record(self._battery, self._next(KIND_BATTERY),
+                                                  step_ns, wall))
+            self._battery = None
         if self._esc:
             out.extend(self._esc_records(step_ns, wall))
             self._esc = []

@@ -27,11 +27,13 @@ import time
 import numpy as np
 
 from silbridge.shm import lockstep as ls
-from silbridge.shm.records import RECORD_DTYPE, RECORD_SIZE
+from silbridge.shm.records import KIND_FAULT, RECORD_DTYPE, RECORD_SIZE
 
 from silbridge.mavlink.hil.hil_channel import connect, make_codec, pid
 from silbridge.mavlink.hil.hil_codec import DECODED_IDS, SensorDecoder
 from silbridge.mavlink.hil.hil_errors import HilInputError, HilPeerLost
+from silbridge.mavlink.hil import hil_fault
+from silbridge.mavlink.hil.hil_bridge_end import BRIDGE_COMPID, BRIDGE_SYSID
 from silbridge.mavlink.hil.hil_pwm import PwmEncoder
 
 FC_SYSID = 1
@@ -96,10 +98,13 @@ class _Actuators:
         self.end = end
         self.pending: list = []
         self.written = 0
+        self.faults = False     # a FAULT batch waits (the supervisor pushes those alone)
 
     def push_batch(self, pwm: np.ndarray) -> int:
         raw = pwm.tobytes()
         n = len(raw) // RECORD_SIZE
+        if n and int.from_bytes(raw[:2], "little") == KIND_FAULT:
+            self.faults = True
         self.pending += [raw[i * RECORD_SIZE:(i + 1) * RECORD_SIZE] for i in range(n)]
         self.written += n
         return n
@@ -227,6 +232,13 @@ class HilFcEnd:
         if not pending and ack_ns is None:
             return
         frames: list = []
+        # A FAULT record (fc_sil/fault_inject.py) goes as its own COMMAND_LONG (hil_fault.py),
+        # before the step's PWM, as it sits before it in the shared-memory ring.
+        if self.actuators.faults:
+            self.actuators.faults = False
+            frames += [hil_fault.encode(self.codec, r, BRIDGE_SYSID, BRIDGE_COMPID)
+                       for r in pending if int.from_bytes(r[:2], "little") == KIND_FAULT]
+            pending = [r for r in pending if int.from_bytes(r[:2], "little") != KIND_FAULT]
         self.encoder.encode(pending, ack_ns, frames)
         self.actuators.pending = []
         self.channel.send(frames)

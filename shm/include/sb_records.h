@@ -37,7 +37,9 @@ enum sb_kind {
     SB_KIND_PWM = 7,      /* FC -> bridge */
     SB_KIND_SETPOINT = 8, /* bridge -> FC, scripted scenario setpoint */
     SB_KIND_ESC = 9,      /* bridge -> FC, one ESC's telemetry report (off unless asked) */
-    SB_KIND_COUNT = 10
+    SB_KIND_BATTERY = 10, /* bridge -> FC, the physics-side battery pack (10 Hz) */
+    SB_KIND_FAULT = 11,   /* FC -> bridge, a fault switched on or off (shm/fault_catalog.py) */
+    SB_KIND_COUNT = 12
 };
 
 /* Header flags. */
@@ -130,6 +132,34 @@ typedef struct sb_esc {
     uint8_t reserved[16];
 } sb_esc;                    /* 40 bytes */
 
+/* The physics-side battery pack (bridge/battery/), as a smart battery reports it: pack
+ * terminal voltage and current, the charge drawn, the state of charge and the weakest cell.
+ * One record per report ([battery] rate_hz, 10 Hz). Quantised at the source to what
+ * BATTERY_STATUS carries (whole mV per cell, cA, whole mAh, whole %, cdegC), so the FC
+ * reads the same numbers over shared memory and over MAVLink HIL. */
+typedef struct sb_battery {
+    float voltage_v;         /* pack terminal voltage under load [V] */
+    float current_a;         /* pack current, ESCs plus avionics [A] */
+    float consumed_mah;      /* charge drawn since start [mAh] */
+    float remaining;         /* charge left over the nominal capacity, 0..1 */
+    float temperature_c;     /* pack temperature [degC] */
+    float lowest_cell_v;     /* terminal voltage of the lowest cell [V] */
+    uint8_t cell_count;      /* cells in series */
+    uint8_t reserved[15];
+} sb_battery;                /* 40 bytes */
+
+/* A fault the FC switches on or off (MAV_CMD_INJECT_FAILURE, a SIM_* parameter), forwarded
+ * beside the PWM for the bridge's fault engine to apply. Units, types and the meaning of the
+ * parameter slots are numbered in shm/fault_catalog.py (pack_params: catalog order, a vec3
+ * in three slots, unused slots 0). */
+typedef struct sb_fault {
+    uint8_t action;          /* 1 on, 0 off */
+    uint8_t unit;            /* catalog unit code (gnss 1, baro 2, ...) */
+    uint8_t type;            /* catalog type code within the unit */
+    uint8_t instance;        /* 1-based instance; 0 all where the unit allows it */
+    float params[9];         /* the type's parameters in catalog units, MAX_PARAM_SLOTS */
+} sb_fault;                  /* 40 bytes */
+
 typedef struct sb_record {
     sb_header h;
     union {
@@ -142,6 +172,8 @@ typedef struct sb_record {
         sb_pwm pwm;
         sb_setpoint setpoint;
         sb_esc esc;
+        sb_battery battery;
+        sb_fault fault;
         uint8_t raw[40];
     } u;
 } sb_record;
@@ -161,6 +193,8 @@ SB_STATIC_ASSERT(sizeof(sb_gt_nav) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_pwm) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_setpoint) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_esc) == 40, "payload must be 40 bytes");
+SB_STATIC_ASSERT(sizeof(sb_battery) == 40, "payload must be 40 bytes");
+SB_STATIC_ASSERT(sizeof(sb_fault) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_record) == SB_RECORD_SIZE, "a record is one 64-byte slot");
 
 #endif /* SB_RECORDS_H */

@@ -8,7 +8,8 @@ from silbridge.shm.records import FLAG_STEP_END, RECORD_DTYPE, Kind
 
 from bridge_test_helpers import of_kind
 
-ORDER = [Kind.IMU, Kind.GT_ATT, Kind.GT_NAV, Kind.BARO, Kind.MAG, Kind.GNSS, Kind.SETPOINT]
+ORDER = [Kind.IMU, Kind.GT_ATT, Kind.GT_NAV, Kind.BARO, Kind.MAG, Kind.GNSS, Kind.SETPOINT,
+         Kind.BATTERY, Kind.ESC]
 
 
 def test_step_order_flags_times_and_seq():
@@ -36,6 +37,7 @@ def test_step_order_flags_times_and_seq():
     counts = sim.published_counts()
     assert counts["imu"] == 4800 and counts["baro"] == 120 and counts["gnss"] == 10
     assert counts["gt_att"] == counts["gt_nav"] == 1200 and counts["setpoint"] == 1
+    assert last_seq[Kind.BATTERY] == 11 and counts["battery"] == 12     # 10 Hz, 0.1..1.2 s
 
 
 def test_records_are_a_view_valid_until_the_next_step():

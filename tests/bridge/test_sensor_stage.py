@@ -41,7 +41,8 @@ def driver(tmp_path_factory):
     # Only the stage, its maths and the record header: no Python include path.
     subprocess.run([cc, "-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-ffp-contract=off",
                     "-I", str(src), "-I", str(ROOT / "shm" / "include"), str(DRIVER),
-                    str(src / "sensor_stage.c"), str(src / "step_maths.c"),
+                    str(src / "sensor_stage.c"), str(src / "sensor_faults.c"),
+                    str(src / "step_maths.c"),
                     str(src / "vibration.c"), str(src / "imu_chip.c"),
                     str(src / "imu_raw.c"), "-lm",
                     "-o", str(exe)], check=True, capture_output=True, text=True)

@@ -9,7 +9,7 @@ import threading
 import pytest
 
 from silbridge.fc_sil import params as P
-from silbridge.fc_sil.battery import BatteryConfig, BatteryModel
+from silbridge.fc_sil.battery import BatteryConfig, BatteryMonitor
 from silbridge.fc_sil.flight_core import FlightCore
 from silbridge.fc_sil.nav_kinematics import sqrt_controller
 from silbridge.fc_sil.nav_pos import PosController, PosGains, accel_to_lean
@@ -117,17 +117,23 @@ def test_position_controller_velocity_command_is_shaped_by_accel_and_jerk():
 
 # ---- battery and pilot ---------------------------------------------------------------------------
 
-def test_battery_sags_under_load_and_drains():
-    b = BatteryModel(BatteryConfig(capacity_mah=1000.0, cells=4, r_ohm=0.025,
-                                   i_motor_full_a=18.0, i_idle_a=0.6))
-    idle_v = b.voltage_v
-    b.update((1500,) * 4, 1.0)
-    assert b.current_a == pytest.approx(0.6 + 4 * 18.0 * 0.5 ** 1.5)
-    assert b.voltage_v < idle_v - b.current_a * 0.025 + 1e-3
-    for _ in range(3600):
-        b.update((1500,) * 4, 1.0)
-    assert b.remaining_pct == 0 and b.voltage_v < 4 * 3.3
-    assert b.consumed_mah > 1000.0
+def test_battery_monitor_reads_the_bridges_pack_through_the_core():
+    """The FC's battery is the bridge's BATTERY record, kept by the C record router."""
+    from silbridge.shm.records import Kind, empty
+    core = FlightCore()
+    b = BatteryMonitor(BatteryConfig(capacity_mah=3000.0))
+    b.read(core)
+    assert not b.valid and b.remaining_pct == -1 and b.current_a == -1.0
+    rec = empty(Kind.BATTERY, 1)
+    rec["sim_ns"] = 100_000_000
+    rec["voltage_v"], rec["current_a"], rec["consumed_mah"] = 15.5, 12.25, 321.0
+    rec["remaining"], rec["temperature_c"], rec["lowest_cell_v"], rec["cell_count"] = 0.5, 31.5, 3.75, 4
+    core.step_batch(rec)
+    b.read(core)
+    assert b.valid and b.sim_ns == 100_000_000
+    assert (b.voltage_v, b.current_a, b.consumed_mah) == (15.5, 12.25, 321.0)
+    assert (b.temperature_c, b.lowest_cell_v, b.cells) == (31.5, 3.75, 4)
+    assert b.remaining_pct == 50 and b.remaining_mah == 1500.0     # the pack's charge x BATT_CAPACITY
 
 
 def test_pilot_sticks_from_manual_control_and_rc_override():

@@ -194,6 +194,11 @@ class KinematicVehicle:
         self.mission_seq = seq
         return mav.MAV_RESULT_ACCEPTED, None
 
+    def inject_failure(self, failure_unit, failure_type, instance):
+        # The kinematic stand-in has no sensors to fail: answered as PX4 with SYS_FAILURE_EN 0.
+        self._record("inject_failure", failure_unit, failure_type, instance)
+        return mav.MAV_RESULT_DENIED, "Failure injection disabled (set SYS_FAILURE_EN 1)"
+
     def mission_updated(self, items):
         self._record("mission_updated", items)
         self.mission_items = items

@@ -24,7 +24,7 @@ import pytest
 
 from silbridge.bridge import step_buffer
 from silbridge.bridge.autopilots.ardupilot import physics as ardupilot_physics
-from silbridge.mavlink.hil import hil_codec, hil_pwm
+from silbridge.mavlink.hil import hil_codec, hil_fault, hil_pwm
 from silbridge.shm import _ring, errors, record_structs
 from silbridge.shm.records import (DTYPES, FLAG_STEP_END, FLAGS_OFFSET, HEADER_SIZE, IMU_DTYPE,
                                    RECORD_DTYPE, RECORD_SIZE, RECORDS_VERSION, Kind,
@@ -37,6 +37,8 @@ UNION_MEMBER = {
     Kind.IMU: "imu", Kind.BARO: "baro", Kind.MAG: "mag", Kind.GNSS: "gnss",
     Kind.GT_ATT: "gt_att", Kind.GT_NAV: "gt_nav", Kind.PWM: "pwm", Kind.SETPOINT: "setpoint",
     Kind.ESC: "esc",
+    Kind.BATTERY: "battery",
+    Kind.FAULT: "fault",
 }
 HEADER_FIELDS = ("kind", "flags", "seq", "sim_ns", "wall_ns")
 
@@ -184,7 +186,8 @@ WHOLE_SLOTS = {
     "step_buffer.SETPOINT": (step_buffer.SETPOINT, [Kind.SETPOINT]),
     "hil_pwm._PWM": (hil_pwm._PWM, [Kind.PWM]),
     **{f"hil_codec._S_{k.name}": (getattr(hil_codec, f"_S_{k.name}"), [k])
-       for k in DTYPES if k is not Kind.PWM},
+       for k in DTYPES if k not in (Kind.PWM, Kind.FAULT)},
+    "hil_fault._FAULT": (hil_fault._FAULT, [Kind.FAULT]),
     "ardupilot physics._PWM": (ardupilot_physics._PWM, [Kind.PWM]),
     **{f"record_struct({k.name})": (record_struct(k), [k]) for k in DTYPES},
 }

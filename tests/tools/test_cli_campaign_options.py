@@ -57,10 +57,13 @@ def test_ablate_writes_a_report_unless_told_not_to(tmp_path):
     with_report = _ablate(tmp_path / "a")
     index = tmp_path / "a" / "report" / "index.html"
     assert with_report["report"] == str(index) and index.is_file()
-    assert "Ablation" in index.read_text()          # the deltas are on the page
+    assert "Ablation" in index.read_text()          # the verdicts are on the page
     without = _ablate(tmp_path / "b", "--no-report")
     assert "report" not in without and not (tmp_path / "b" / "report").exists()
     assert (tmp_path / "b" / "ablation.json").is_file()
+    # Judged by the paired rule: one seed each is too few pairs for a verdict, and says so.
+    assert without["paired"]["no_slew"]["S1"]["pwm_pp_us"]["verdict"] == "too_few"
+    assert {r["variant"] for r in without["runs"]} >= {"full", "no_slew", "defaults"}
 
 
 def test_bench_params_file_reaches_the_flights_and_is_never_written(tmp_path):

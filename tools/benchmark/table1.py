@@ -123,16 +123,3 @@ def markdown(table: dict, *, paper: bool = True, title: str = "Table 1", rows=No
     if rows is None and table.get("comparison"):    # under Table 1 itself, not under others
         lines += ["", comparison_markdown(table["comparison"])]
     return "\n".join(lines)
-
-
-def deltas(full: dict, variant: dict) -> dict:
-    """variant minus full, per scenario and metric (means)."""
-    out = {}
-    for name, metrics in variant["scenarios"].items():
-        base = full["scenarios"].get(name, {})
-        out[name] = {}
-        for k, stat in metrics.items():
-            b = base.get(k, {}).get("mean")
-            v = stat.get("mean")
-            out[name][k] = None if b is None or v is None else v - b
-    return out

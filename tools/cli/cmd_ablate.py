@@ -1,9 +1,12 @@
 """`silbridge ablate`: the campaign with each stabilisation feature off alone and all off.
 
-Deltas are against `full`, the paper's controller with every ablated feature on
-(tools/benchmark/ablation.py), not against the declared defaults; a `defaults` row
-shows those. Writes ablation.md, ablation.json and, unless --no-report, report/index.html:
-the full controller's Table 1 and plots with the deltas beside them."""
+Each variant is compared with `full`, the paper's controller with every ablated feature on
+(tools/benchmark/ablation.py), not with the declared defaults (a `defaults` row shows those),
+paired by seed with the one rule of Table 1 (tools/benchmark/ablation_table.py: median
+difference, 95 % bootstrap interval, verdict). With a harmonic notch among the parameters
+the notch's own variants join (off, a plain low-pass instead, the in-flight FFT). Writes
+ablation.md, ablation.json (the per-run figures too) and, unless --no-report,
+report/index.html: the full controller's Table 1 and plots with the verdicts beside them."""
 
 from __future__ import annotations
 
@@ -12,13 +15,15 @@ import sys
 import time
 from pathlib import Path
 
+from silbridge.tools.benchmark import ablation_table
 from silbridge.tools.benchmark.ablation import variants
 from silbridge.tools.benchmark.campaign import make_specs, run_campaign
 from silbridge.tools.benchmark.report import write_report
-from silbridge.tools.benchmark.table1 import ROWS, aggregate, deltas, markdown
+from silbridge.tools.benchmark.table1 import aggregate, markdown, scenario_key
 from silbridge.tools.cli.cmd_bench import add_campaign_arguments, campaign_inputs, windows_dict
 
-HELP = "ablation: the campaign with each stabilisation feature off, deltas vs the full FC"
+HELP = ("ablation: the campaign with each stabilisation feature off, paired by seed against "
+        "the full FC")
 
 # Every variant flies the whole campaign: fewer runs than bench's 20 keep it affordable.
 DEFAULT_RUNS = 5
@@ -29,29 +34,6 @@ def add_arguments(p) -> None:
     add_campaign_arguments(p)
     # set_defaults also changes what --help shows: the help texts use %(default)s.
     p.set_defaults(runs=DEFAULT_RUNS, out=DEFAULT_OUT)
-
-
-def delta_markdown(full: dict, per_variant: dict) -> str:
-    names = list(full["scenarios"])
-    lines = ["**Ablation**: mean of each metric with the feature off, minus the full "
-             "controller's (same seeds)", ""]
-    for key, label, unit, fmt in ROWS[:5]:
-        head = ["variant"] + [f"{n} Δ{label}" for n in names]
-        lines += [f"*{label} ({unit})*", "", "| " + " | ".join(head) + " |",
-                  "|" + "---|" * len(head)]
-        base = ["full (absolute)"] + [
-            fmt.format(full["scenarios"][n][key]["mean"])
-            if full["scenarios"][n].get(key, {}).get("mean") is not None else "n/a"
-            for n in names]
-        lines.append("| " + " | ".join(base) + " |")
-        for label_v, d in per_variant.items():
-            row = [label_v]
-            for n in names:
-                v = d.get(n, {}).get(key)
-                row.append("n/a" if v is None else ("+" if v >= 0 else "") + fmt.format(v))
-            lines.append("| " + " | ".join(row) + " |")
-        lines.append("")
-    return "\n".join(lines)
 
 
 def run(args) -> int:
@@ -85,16 +67,18 @@ def run(args) -> int:
         by_variant.setdefault(r.spec.variant, []).append(r)
     tables = {v: aggregate(rs) for v, rs in by_variant.items()}
     full = tables["full"]
-    d = {v: deltas(full, t) for v, t in tables.items() if v != "full"}
-    md = delta_markdown(full, d)
+    rows = ablation_table.run_rows(results, lambda r: scenario_key(r.spec.scenario))
+    judged = ablation_table.payload(rows)
+    md = ablation_table.markdown(rows, judged["paired"])
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "ablation.md").write_text(md + "\n")
-    payload = {"variants": tables, "deltas": d, "wall_s": time.monotonic() - t0,
-               "runs": args.runs, "duration_s": args.duration,
-               "windows": windows_dict(windows), **(stopped if STOP.requested else {})}
+    (out_dir / "ablation.md").write_text(md)
+    payload = {"variants": tables, **judged, "wall_s": time.monotonic() - t0,
+               "runs_per_variant": args.runs, "duration_s": args.duration,
+               "params": dict(params), "windows": windows_dict(windows),
+               **(stopped if STOP.requested else {})}
     (out_dir / "ablation.json").write_text(json.dumps(payload, indent=2) + "\n")
     if not args.no_report:
-        # The full controller's Table 1 and plots, with the deltas as a section of the page.
+        # The full controller's Table 1 and plots, with the verdicts as a section of the page.
         page = {**full, "runs": args.runs, "duration_s": args.duration,
                 "params": dict(params)}
         payload["report"] = str(write_report(by_variant["full"], markdown(page), page, out_dir,

@@ -28,7 +28,7 @@ TIMING_CHANNEL = "/timing"
 KIND_CHANNELS = {
     Kind.IMU: "/imu", Kind.BARO: "/baro", Kind.MAG: "/mag", Kind.GNSS: "/gnss",
     Kind.GT_ATT: "/gt_att", Kind.GT_NAV: "/gt_nav", Kind.PWM: "/pwm",
-    Kind.SETPOINT: "/setpoint", Kind.ESC: "/esc",
+    Kind.SETPOINT: "/setpoint", Kind.ESC: "/esc", Kind.BATTERY: "/battery",
 }
 
 # One row per FC cycle (per consumed IMU batch or per PWM tick), built by the loop.

@@ -106,6 +106,9 @@ def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
     if mavlink is not None:
         from silbridge.fc_sil.vehicle_server import start_mavlink_vehicle
         vehicle = start_mavlink_vehicle(core, mavlink, overrides=overrides, sink=sink, out=out)
+        # through the vehicle's store, which its host parameters (SIM_*, the FC-side
+        # [[failure]] switches: fc_param_events.py) are read from
+        schedule = ParamSchedule(vehicle.store, param_events) if param_events else None
         return FcLoop(core, seg, supervisor=vehicle, sink=sink, schedule=schedule)
     if param_file:
         from silbridge.fc_sil.vehicle_server import load_start_params
@@ -234,7 +237,8 @@ def _end_fields(res) -> dict:
     if res is None:
         return {"interrupted": STOP.name} if STOP.requested else {}
     rates = {"rates": res.rates} if res.rates else {}
-    return {**({"interrupted": res.interrupted} if res.interrupted else {}), **rates}
+    link = {"link": res.link} if any(res.link.values()) else {}
+    return {**({"interrupted": res.interrupted} if res.interrupted else {}), **rates, **link}
 
 
 def _in_process_notify(fc):
@@ -408,6 +412,8 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         "rates": res.rates,
         # The signal that ended the run early ("SIGINT"/"SIGTERM"), else None.
         "interrupted": res.interrupted,
+        # Records the SIL link's faults delayed and dropped (bridge/link_faults.py).
+        "link": res.link,
         **({"mavlink": fc_summary["mavlink"]} if "mavlink" in fc_summary else {}),
     }
 
@@ -438,6 +444,11 @@ def print_summary(s: dict, out=print) -> None:
             f"{f(s['attitude_rms_deg'], '{:.3f}')} deg  altitude "
             f"{f(s['altitude_rms_m'], '{:.3f}')} m  crashed {s['crashed']}")
     out(f"trace hash {s['trace_hash']}")
+    link = s.get("link") or {}
+    if any(link.values()):
+        out(f"link faults: sensor records delayed {link['sensor_delayed']}, dropped "
+            f"{link['sensor_dropped']}; PWM records delayed {link['pwm_delayed']}, dropped "
+            f"{link['pwm_dropped']}")
     rt = s.get("rates") or {}
     if rt.get("degraded"):
         out(f"DEGRADED real time (slow host): IMU {rt['imu_hz']:.1f} Hz (want "

@@ -25,6 +25,14 @@ Keep SITL's own SIM_ACC*/SIM_GYR* noise at 0 so it is not added twice.
 Position, velocity and attitude are truth: SITL builds its GPS, baro and
 compass from them with its own models (our baro/mag/GNSS records are not sent).
 
+Faults of the link (unit "link", bridge/link_faults.py): the servo packet's motors pass
+the motor-output direction (a lost or late command: the motors hold the last that
+arrived); the reply's sensors, IMU and truth together, pass the sensor direction as one
+message per step (a lost or late reply: SITL gets the newest state that arrived, under
+this step's timestamp, so its clock still follows ours and lockstep never waits). A fault
+switches at the start of a physics step, so the motors of that step's packet were read
+before it: the motor direction starts one step (1 ms) late.
+
 Timing: the server passes each packet's arrival time to `handle` and calls
 `sent` once the reply is out; the sink then gets one timing(...) call per
 stepped packet: PWM time [sim ns], arrival, physics step done and reply sent
@@ -40,7 +48,9 @@ import numpy as np
 
 from silbridge.bridge._step import json_reply as _json_reply
 from silbridge.bridge.autopilots.ardupilot import json_protocol as apj
-from silbridge.shm.records import KIND_PWM, PWM_DTYPE, RECORD_SIZE, Kind, record_struct
+from silbridge.bridge.link_faults import PWM_COMMAND, LinkFaults
+from silbridge.shm.records import (KIND_PWM, PWM_DTYPE, RECORD_DTYPE, RECORD_SIZE, Kind,
+                                   record_struct)
 from silbridge.shm.records import NS_PER_S as _NS
 
 # The sink's PWM record, packed in one call from shm/records.py's description of the slot.
@@ -58,6 +68,7 @@ class ArduPilotPhysics:
     def __init__(self, make_sim, sink=None, note=None):
         self._make_sim = make_sim
         self.sim = make_sim()
+        self.link = self._link_faults()
         self.sink = sink
         self._note = note or (lambda text: None)
         self.last_frame: int | None = None
@@ -112,14 +123,41 @@ class ArduPilotPhysics:
         self._note(f"SITL frame count went back ({last} -> {frame}): SITL restarted; "
                    "physics restarted from the scenario's initial state")
         self.sim = self._make_sim()
+        self.link = self._link_faults()
+
+    def _link_faults(self) -> LinkFaults:
+        sim = self.sim
+        link = LinkFaults(sim.scenario.seed,
+                          on_event=lambda ns, text: sim.events.append((ns, text)))
+        sim.faults.register("link", link)
+        self._motors_held = (float(apj.PWM_MIN_US),) * apj.MOTORS
+        self._link_rec = np.zeros(1, dtype=PWM_DTYPE)     # a packet's motors as a PWM record
+        self._link_rec["kind"] = Kind.PWM
+        return link
+
+    def _motors_through_link(self, motors: tuple) -> tuple:
+        """The servo packet's motors through a faulty link: the newest command that arrives
+        by now, else the last that arrived."""
+        rec = self._link_rec
+        rec["pwm_us"][0, :apj.MOTORS] = motors     # whole microseconds: a u16 holds them
+        arrived = self.link.pwm_in(rec.view(RECORD_DTYPE), self.sim.sim_ns)
+        if arrived is not None:
+            us = PWM_COMMAND.unpack_from(arrived)[:apj.MOTORS]
+            self._motors_held = tuple(float(u) for u in us)
+        return self._motors_held
 
     def _step(self, pkt: apj.ServoPacket) -> bytes:
         sim = self.sim
         motors = apj.motor_pwm_us(pkt)
+        if self.link.pwm_engaged:
+            motors = self._motors_through_link(motors)
+        else:
+            self._motors_held = motors
         applied_ns = sim.sim_ns
         recs = sim.step(motors)
         self.steps += 1
-        reply = _json_reply(recs, sim.sim_ns)
+        sent = self.link.step_out(recs, sim.sim_ns) if self.link.sensors_engaged else recs
+        reply = _json_reply(sent, sim.sim_ns)
         if reply is None:
             raise apj.non_finite(f"at sim time {sim.sim_ns / _NS:.3f} s")
         if self.sink is not None:
@@ -146,4 +184,4 @@ class ArduPilotPhysics:
         return {"packets": self.packets, "steps": self.steps, "duplicates": self.duplicates,
                 "dropped_frames": self.dropped_frames, "resets": self.resets,
                 "sitl_rate_hz": self.sitl_rate_hz, "channels": self.channels,
-                "physics_hz": self.physics_hz}
+                "physics_hz": self.physics_hz, "link": self.link.counts()}

@@ -39,7 +39,8 @@ from silbridge.bridge.autopilots.px4.hil_messages import (
     StepAccumulator,
     controls_to_pwm_us,
 )
-from silbridge.shm.records import PWM_DTYPE, Kind
+from silbridge.bridge.link_faults import PWM_COMMAND, LinkFaults
+from silbridge.shm.records import PWM_DTYPE, RECORD_DTYPE, Kind
 
 from silbridge.bridge.errors import BridgeError
 
@@ -78,6 +79,13 @@ class Px4Physics:
         self._pwm["kind"] = Kind.PWM
         self._pwm["channel_count"] = MOTORS
         self._pwm_seq = 0
+        # Faults of the link (bridge/link_faults.py): PX4's motors through the motor-output
+        # direction, each physics step's sensor records through the sensor direction (truth
+        # is never late: HIL_STATE_QUATERNION is PX4's ground truth, not a sensor).
+        self.link = LinkFaults(sim.scenario.seed,
+                               on_event=lambda ns, text: sim.events.append((ns, text)))
+        sim.faults.register("link", self.link)
+        self._motors_sent = list(self.motors_us)     # what reached the motors last
         self._held: list = []        # (sim_ns, records, rotor row) of the step's physics steps, for the log
         self._timing = None
         self._rx_ns = 0
@@ -110,12 +118,14 @@ class Px4Physics:
         acc = self.acc
         acc.reset()
         applied_ns = sim.sim_ns
-        motors = self.motors_us
+        link = self.link
+        motors = self._motors_through_link() if link.pwm_engaged else self.motors_us
+        self._motors_sent = motors
         held = self._held
         for _ in range(self.substeps):
             t_ns = sim.sim_ns
             recs = sim.step(motors)
-            acc.add(recs)
+            acc.add(link.sensors_out(recs, sim.sim_ns) if link.sensors_engaged else recs)
             if self.sink is not None:     # the Simulator reuses its buffer: keep a copy
                 # The rotor speeds too: the sink writes these steps later, at `sent`.
                 held.append((t_ns, recs.copy(), (sim.sim_ns, tuple(sim.rotor_rad_s()))))
@@ -129,6 +139,15 @@ class Px4Physics:
         self.encoder.encode_truth(acc, step_us, out)
         self.last_sent_us = step_us
         self._timing = (applied_ns, self._rx_ns, time.monotonic_ns())
+
+    def _motors_through_link(self) -> list:
+        """PX4's newest motors through a faulty link: the newest command that arrives by now,
+        else the last that arrived."""
+        p = self._pwm
+        p["pwm_us"][0, :MOTORS] = self.motors_us
+        arrived = self.link.pwm_in(p.view(RECORD_DTYPE), self.sim.sim_ns)
+        return (list(PWM_COMMAND.unpack_from(arrived)[:MOTORS]) if arrived is not None
+                else self._motors_sent)
 
     def sent(self, tx_wall_ns: int) -> None:
         """The step's frames left at tx_wall_ns: what PX4 does not wait for happens now,
@@ -164,4 +183,4 @@ class Px4Physics:
                 "first_reply_sim_s": (None if self.first_reply_us is None
                                       else self.first_reply_us / 1e6),
                 "state_interval_us": self.encoder.state_interval_us,
-                "sent": dict(self.encoder.sent)}
+                "sent": dict(self.encoder.sent), "link": self.link.counts()}

@@ -29,8 +29,8 @@ def _refuse_paper_options(args, paper_defaults: dict) -> None:
     if args.executor != "local" or args.jobs is not None:
         given.append("--executor/--jobs (nav runs one at a time: each flies in real time)")
     if given:
-        raise CampaignError(f"{', '.join(given)}: options of the paper suite; --suite nav "
-                            f"flies N1..N4 with its own plans: leave them out")
+        raise CampaignError(f"{', '.join(given)}: options of the paper suite; --suite "
+                            f"{args.suite} flies its own plans: leave them out")
 
 
 def run_nav(args, paper_defaults: dict, fcs: list[str], arducopter, px4, speed_given: bool

@@ -37,8 +37,8 @@ class GroundTruthLog:
         self.writer.close(**summary)
 
 
-def fly_autopilot_thread(plan: Plan, make_link, home, clock, stop=None, ways=None
-                         ) -> tuple[threading.Thread, dict]:
+def fly_autopilot_thread(plan: Plan, make_link, home, clock, stop=None, ways=None,
+                         client_cls=NavClient, fly=fly_plan) -> tuple[threading.Thread, dict]:
     """The client's flight in a thread (the physics serves in the caller's); out["flight"]
     holds the Flight when done, out["done"] says so. ways: tools/benchmark/nav/ways.py."""
     out: dict = {"done": False}
@@ -47,7 +47,7 @@ def fly_autopilot_thread(plan: Plan, make_link, home, clock, stop=None, ways=Non
         link = None
         try:
             link = make_link()
-            out["flight"] = fly_plan(plan, NavClient(link, *home, clock=clock, stop=stop), ways)
+            out["flight"] = fly(plan, client_cls(link, *home, clock=clock, stop=stop), ways)
         except LinkError as e:
             out["flight"] = Flight(status="failed", reason=str(e))
         finally:
@@ -64,7 +64,8 @@ class Parts:
     sink: GroundTruthLog | None = None
 
 
-def fly_foreign(plan: Plan, run, sc, start, *, stop=None, connect_timeout_s: float) -> Flight:
+def fly_foreign(plan: Plan, run, sc, start, *, stop=None, connect_timeout_s: float,
+                client_cls=NavClient, fly=fly_plan) -> Flight:
     """One nav run of a foreign autopilot (run: tools/autopilots/common/run.py AutopilotRun).
 
     start(parts) -> (phys, make_link, ways): opens the log and the server into `parts`,
@@ -76,7 +77,8 @@ def fly_foreign(plan: Plan, run, sc, start, *, stop=None, connect_timeout_s: flo
     try:
         phys, make_link, ways = start(parts)
         thread, out = fly_autopilot_thread(plan, make_link, (sc.home.lat_deg, sc.home.lon_deg),
-                                           lambda: phys.sim.sim_ns / _NS, stop, ways)
+                                           lambda: phys.sim.sim_ns / _NS, stop, ways,
+                                           client_cls, fly)
         thread.start()
         parts.server.serve(BOOT_SLACK_S + plan.budget_s, connect_timeout_s=connect_timeout_s,
                            stop=lambda: out["done"] or run.exited())

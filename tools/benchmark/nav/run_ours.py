@@ -23,8 +23,9 @@ STOP_WALL_S = 30.0            # after SIGINT, the run may take this long to clos
 
 
 def fly_ours(plan: Plan, *, seed: int, log_path: str, speed: float, params=(),
-             stop=None) -> Flight:
-    """params: (name, value) pairs of our FC's parameters, checked by the caller."""
+             stop=None, client_cls=NavClient, fly=fly_plan) -> Flight:
+    """params: (name, value) pairs of our FC's parameters, checked by the caller;
+    client_cls and fly: the failure suite's client and flight (tools/benchmark/failures/)."""
     from silbridge.bridge.scenario import load_scenario
 
     sc = load_scenario(plan.physics_path, seed=seed)
@@ -43,8 +44,8 @@ def fly_ours(plan: Plan, *, seed: int, log_path: str, speed: float, params=(),
         proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err,
                                 stdin=subprocess.DEVNULL)
     try:
-        client = NavClient(link, sc.home.lat_deg, sc.home.lon_deg, stop=stop)
-        flight = fly_plan(plan, client)
+        client = client_cls(link, sc.home.lat_deg, sc.home.lon_deg, stop=stop)
+        flight = fly(plan, client)
     finally:
         link.close()
         if proc.poll() is None:
