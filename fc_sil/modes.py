@@ -13,7 +13,8 @@ one waypoint navigator and one vertical channel, as in ArduCopter.
   GUIDED    4  GCS targets: take-off, position, velocity (GUID_TIMEOUT), reposition
   LOITER    5  position hold; sticks = acceleration, up to LOIT_SPEED; centred = brake, hold
   RTL       6  climb to RTL_ALT, fly home, loiter RTL_LOIT_TIME, land (or hover RTL_ALT_FINAL)
-  LAND      9  hold position (when there is one) and descend; disarm on touchdown
+  LAND      9  hold position (when there is one) and descend; disarm on touchdown; entered by
+               a failsafe, it first holds its altitude LAND_WITH_DELAY_S (pause())
   BRAKE    17  stop at 7.5 m/s^2 along a jerk-limited path, then hold
 """
 
@@ -27,6 +28,9 @@ from .nav_loiter import LoiterNav
 
 # ArduCopter's BRAKE_MODE_DECEL_RATE (750 cm/s^2): Brake stops harder than WPNAV_ACCEL
 BRAKE_DECEL_M_S2 = 7.5
+# ArduCopter's LAND_WITH_DELAY_MS: a failsafe's LAND (set_mode_land_with_pause) holds its
+# altitude this long before descending, so a pilot or the GCS can take over first
+LAND_WITH_DELAY_S = 4.0
 
 
 class Mode:
@@ -214,8 +218,13 @@ class Land(Mode):
     def enter(self, v):
         v.reset_horizontal()
         self.hold_ne = tuple(v.est.pos_ne_m) if v.position_ok() else None
+        self.pause_until_ns = -1
         if v.armed and not v.airborne:
             v.disarm_landed("LAND")
+
+    def pause(self, v) -> None:
+        """A failsafe's LAND: hold the altitude LAND_WITH_DELAY_S first, as ArduCopter."""
+        self.pause_until_ns = v.sim_ns + int(LAND_WITH_DELAY_S * 1e9)
 
     @property
     def guided_enabled(self) -> bool:
@@ -228,7 +237,9 @@ class Land(Mode):
             self.hold_ne = None
             v.command_attitude(0.0, 0.0)     # no position: land level, drift with the wind
         v.hold_heading()
-        if v.land_descent(dt_s):
+        if v.airborne and v.sim_ns < self.pause_until_ns:
+            v.command_climb(dt_s, 0.0)
+        elif v.land_descent(dt_s):
             v.disarm_landed("LAND")
 
 

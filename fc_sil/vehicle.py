@@ -438,11 +438,14 @@ class Vehicle(NavHelpers, GcsCommands):
         return None
 
     def set_mode_internal(self, number: int, why: str) -> None:
-        """A failsafe's mode change: LAND if the wanted mode refuses."""
+        """A failsafe's mode change: LAND if the wanted mode refuses; a failsafe's LAND holds
+        its altitude a few seconds first (ArduCopter's set_mode_land_with_pause)."""
         reason = self._change_mode(number)
         if reason and number != CopterMode.LAND:
             log.info("%s: %s refused (%s), landing", why, M.MODE_NAMES.get(number), reason)
             self._change_mode(CopterMode.LAND)
+        if self.mode.number == CopterMode.LAND:
+            self.mode.pause(self)    # set_mode_land_with_pause
 
 def _git_hash() -> str:
     """AUTOPILOT_VERSION.flight_custom_version: the source's git hash (8 chars) if known."""

@@ -97,6 +97,14 @@ def test_gnss_loss_in_loiter_triggers_the_ekf_failsafe_which_lands_and_clears():
     def every(f, st):
         if st.get("on") and "t_fs" not in st and f.v.failsafe.ekf.failsafe:
             st["t_fs"] = f.t_s
+            st["alt_fs"] = f.truth_agl_m()
+        if "t_fs" in st:
+            # ArduCopter's set_mode_land_with_pause: the failsafe's LAND holds 4 s, then descends
+            dt = f.t_s - st["t_fs"]
+            if dt < 3.5:
+                st["pause_drop"] = max(st.get("pause_drop", 0.0), st["alt_fs"] - f.truth_agl_m())
+            elif dt > 7.0 and "alt_7s" not in st:
+                st["alt_7s"] = f.truth_agl_m()
 
     f, res, st = _loiter_with_fault("gnss", "off", {}, 12.0, 28.0, every=every)
     texts = _texts(f)
@@ -105,6 +113,8 @@ def test_gnss_loss_in_loiter_triggers_the_ekf_failsafe_which_lands_and_clears():
     # the estimate dead-reckons for 7 s (EKF3 posRetryTimeNoVel) before the 1 s count starts
     assert st["t_fs"] - T_FAULT > 7.0
     assert f.v.mode.number == CopterMode.LAND      # a failsafe's LAND stays LAND
+    assert st["pause_drop"] < 0.5                  # held its altitude through the pause
+    assert st["alt_fs"] - st["alt_7s"] > 1.0       # then descended
     assert any(s == "EKF Failsafe Cleared" and t > T_FAULT + 12.0 for t, _, s in texts)
     assert not res.crashed
 
