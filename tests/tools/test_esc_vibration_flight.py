@@ -147,7 +147,7 @@ def test_a_ground_station_gets_esc_telemetry_and_vibration(tmp_path):
     assert got["VIBRATION"][-1].vibration_z > 0.0
 
 
-def _hover_vibration(scenario: str) -> tuple:
+def _hover_vibration(scenario: str, params: dict | None = None) -> tuple:
     st = {}
 
     def script(f):
@@ -158,7 +158,7 @@ def _hover_vibration(scenario: str) -> tuple:
             st["vibe"] = v.core.vibration()
             st["agl"] = f.truth_agl_m()
 
-    fly_scripted(script, duration_s=9.5, scenario=scenario)
+    fly_scripted(script, duration_s=9.5, scenario=scenario, params=params)
     assert st["agl"] > 2.0, st
     return st["vibe"]
 
@@ -175,6 +175,9 @@ def test_vibration_levels_rise_with_the_vehicles_vibration(tmp_path):
 def test_clip_count_counts_an_accelerometer_driven_into_its_range(tmp_path):
     """A vibration of ~100 m/s^2 per motor at hover drives the +-16 g accelerometer into its
     range: VIBRATION counts the clipped samples (and reads far beyond ArduPilot's 60 m/s^2)."""
-    wild = _hover_vibration(_scenario(tmp_path, "wild", "\n[imu]\nvib_accel = 400.0\n"))
+    # Such a vibration also corrupts the vertical estimate, so the EKF failsafe would land the
+    # vehicle (docs/reference/failsafes.md); off here: this test reads VIBRATION in a hover.
+    wild = _hover_vibration(_scenario(tmp_path, "wild", "\n[imu]\nvib_accel = 400.0\n"),
+                            params={"FS_EKF_THRESH": 0.0})
     assert wild[3] > 100, wild
     assert min(wild[:3]) > 60.0, wild
