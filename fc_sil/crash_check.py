@@ -17,9 +17,11 @@ import math
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from .ekf_check import LowPass
+from silbridge.shm.records import NS_PER_S as NS
 
-NS = 1_000_000_000
+from .ekf_check import LowPass
+from .held_for import HeldFor
+
 TRIGGER_S = 2.0                 # CRASH_CHECK_TRIGGER_SEC
 ANGLE_DEVIATION_DEG = 30.0      # CRASH_CHECK_ANGLE_DEVIATION_DEG
 ANGLE_MIN_DEG = 15.0            # CRASH_CHECK_ANGLE_MIN_DEG
@@ -48,7 +50,7 @@ def lean_deg(roll: float, pitch: float) -> float:
 class CrashCheck:
     def __init__(self):
         self.acc_filt = [LowPass(), LowPass(), LowPass()]
-        self._since_ns = None
+        self._held = HeldFor(TRIGGER_S)
         self._last_ns = None
         self.crashed = False
 
@@ -62,20 +64,15 @@ class CrashCheck:
         acc = self.filtered_accel(v)     # filtered every step, as the land detector's
         st = v.status
         if not v.armed or not v.airborne or st is None or not v.store.host("FS_CRASH_CHECK"):
-            self._since_ns = None
+            self._held.update(False, v.sim_ns)
             return
         roll, pitch, _ = v.euler_rad
         err = thrust_error_deg(tuple(float(x) for x in st["att_target_rad"]), v.euler_rad)
         vn, ve = v.est.vel_ne_m_s
         speed = math.sqrt(vn * vn + ve * ve + v.climb_m_s * v.climb_m_s)
-        if (acc >= ACCEL_MAX_M_S2 or lean_deg(roll, pitch) <= ANGLE_MIN_DEG
-                or err <= ANGLE_DEVIATION_DEG or speed >= SPEED_MAX_M_S):
-            self._since_ns = None
-            return
-        if self._since_ns is None:
-            self._since_ns = v.sim_ns
-        if v.sim_ns - self._since_ns >= TRIGGER_S * NS:
-            self._since_ns = None
+        crashed = (acc < ACCEL_MAX_M_S2 and lean_deg(roll, pitch) > ANGLE_MIN_DEG
+                   and err > ANGLE_DEVIATION_DEG and speed < SPEED_MAX_M_S)
+        if self._held.update(crashed, v.sim_ns):
             self.crashed = True
             v.statustext(mav.MAV_SEVERITY_EMERGENCY,
                          f"Crash: Disarming: AngErr={err:.0f}>{ANGLE_DEVIATION_DEG:.0f}, "

@@ -24,9 +24,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.fc_sil.status import SAT_THR_HIGH
 
-from .crash_check import ANGLE_DEVIATION_DEG, thrust_error_deg
+from silbridge.shm.records import NS_PER_S as NS
 
-NS = 1_000_000_000
+from .crash_check import ANGLE_DEVIATION_DEG, thrust_error_deg
+from .held_for import HeldFor
+
 TRIGGER_S = 1.0                 # THRUST_LOSS_CHECK_TRIGGER_SEC
 ANGLE_DEVIATION_DEG_TGT = 15.0  # THRUST_LOSS_CHECK_ANGLE_DEVIATION_CD / 100
 MINIMUM_THROTTLE = 0.9          # THRUST_LOSS_CHECK_MINIMUM_THROTTLE
@@ -41,7 +43,7 @@ class ThrustLossCheck:
         self.out_filt = [0.0] * motors
         self.boost = False
         self.lost_motor = 0             # 0-based, held while boost is on
-        self._since_ns = None
+        self._held = HeldFor(TRIGGER_S)
         self._last_ns = None
 
     def _track_motors(self, v) -> None:
@@ -68,13 +70,8 @@ class ThrustLossCheck:
         if int(v.store.host("FLIGHT_OPTIONS")) & OPT_DISABLE_THRUST_LOSS or self.boost:
             return
         st = v.status
-        if not v.armed or not v.airborne or st is None or not self._suspect(v, st):
-            self._since_ns = None
-            return
-        if self._since_ns is None:
-            self._since_ns = v.sim_ns
-        if v.sim_ns - self._since_ns >= TRIGGER_S * NS:
-            self._since_ns = None
+        suspect = v.armed and v.airborne and st is not None and self._suspect(v, st)
+        if self._held.update(suspect, v.sim_ns):
             self.boost = True
             v.statustext(mav.MAV_SEVERITY_EMERGENCY,
                          f"Potential Thrust Loss ({self.lost_motor + 1})")
