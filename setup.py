@@ -63,7 +63,8 @@ if core_src:
     )
 
 # stepmodule.c (the Python type), step_run.c (the CPython shim of one step), sensor_stage.c
-# (the pure-C sensor stage), step_config.c, step_forces.c, step_maths.c, step_json.c
+# (the pure-C sensor stage), battery.c (the pure-C battery pack the stage reports) and
+# step_battery.c (its Kernel methods), step_config.c, step_forces.c, step_maths.c, step_json.c
 step_src = sources("bridge/src/*.c")
 if step_src:
     extensions.append(

@@ -27,6 +27,7 @@ from silbridge.shm import lockstep as ls
 
 from .bridge_loop import BATCH_MAX_STEPS, BridgeLoop, PeerWatch
 from .errors import PeerLost, StartupCheckFailed
+from .fault_records import fault_summary
 from .pacing import Pacer
 from .rate_watch import RateShortfall, RateWatch
 from .startup_checks import (
@@ -79,6 +80,7 @@ class BridgeResult:
     rates: dict = field(default_factory=dict)   # rates_summary(): achieved, late, degraded
     steps_in_c: int = 0    # steps run in C batches with the in-process FC (the rest per step)
     link: dict = field(default_factory=dict)    # link faults' records delayed / dropped
+    faults: dict = field(default_factory=dict)  # per unit: switches, FAULT records ({}: none)
 
 
 class _NeverStop:
@@ -237,7 +239,7 @@ class _Flight:
             if cfg.lockstep and k == check_step:
                 self.checks.extend(first_window_checks(loop, cfg, time.monotonic_ns() - self.t0,
                                                        out, None))
-            if sim.crashed:
+            if sim.crashed and sim.end_on_crash:
                 out(f"vehicle crashed at t={sim.sim_ns / _NS:.3f} s; run stopped")
                 break
 
@@ -306,7 +308,7 @@ class _Flight:
             if sim.step_index == self.check_step:
                 self.checks.extend(first_window_checks(loop, cfg, time.monotonic_ns() - self.t0,
                                                        self.out, None))
-            if sim.crashed:
+            if sim.crashed and sim.end_on_crash:
                 self.out(f"vehicle crashed at t={sim.sim_ns / _NS:.3f} s; run stopped")
                 break
 
@@ -488,4 +490,5 @@ def _result(loop: BridgeLoop, cfg: BridgeRunConfig, checks, wall_ns: int, pacer)
         attitude_rms_deg=loop.attitude_rms_deg(), altitude_rms_m=loop.altitude_rms_m(),
         trace_hash=loop.trace_hash(), crashed=bool(sim.crashed),
         late_steps=pacer.late_steps if pacer else 0,
-        max_late_us=pacer.max_late_ns / 1e3 if pacer else 0.0, link=loop.link.counts())
+        max_late_us=pacer.max_late_ns / 1e3 if pacer else 0.0, link=loop.link.counts(),
+        faults=fault_summary(sim.faults, loop.fault_records))

@@ -10,7 +10,7 @@ Where the numbers come from (keys and cited defaults in bridge/scenario_schema.p
 - rpm: JSBSim's motor model, ``fcs/mN-omega-rad_s`` after the step (60 / 2 pi rad/s).
 - current: each ESC's input power P (the DC-motor equivalent of the 2212 920KV motor,
   bridge/battery/load.py) over the pack voltage: I = P / V_pack.
-- voltage: the physics-side pack (bridge/battery/pack.py, the one every autopilot reads)
+- voltage: the physics-side pack (bridge/src/battery.h, the one every autopilot reads)
   under the present load of all ESCs plus the avionics, solved for the sag the currents
   themselves cause; the pack's charge and temperature advance at its own report rate.
 - temperature: a first-order rise towards ambient + k x (power through the ESC), time
@@ -55,7 +55,7 @@ class EscTelemetry:
         self.schedule = Schedule(rate)
         self.period_s = 1.0 / rate
         self._load = load              # bridge/battery/load.py: each ESC's input power
-        self._pack = pack              # bridge/battery/pack.py: the one pack
+        self._pack = pack              # bridge/battery Battery: the one pack (solve, voltage_v)
         self._k_per_w = float(cfg.temp_k_per_w)
         self._tau_s = float(cfg.temp_tau_s)
         self._ambient_c = float(ambient_c)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections import Counter
 
 import numpy as np
 
@@ -33,6 +34,7 @@ class FaultRecords:
         self.received = 0
         self.malformed = 0
         self.stray = 0
+        self.by_unit: Counter = Counter()     # unit name -> FAULT records read (malformed: "?")
 
     def route(self, recs: np.ndarray) -> None:
         """recs: records of one collection (generic view), PWM among them skipped."""
@@ -53,6 +55,7 @@ class FaultRecords:
     def _inject(self, r) -> str | None:
         u = cat.unit_coded(int(r["unit"]))
         t = u.type_coded(int(r["type"])) if u is not None else None
+        self.by_unit[u.name if t is not None else "?"] += 1
         if t is None or int(r["action"]) not in (0, 1):
             return (f"unit {int(r['unit'])} type {int(r['type'])} action {int(r['action'])} "
                     f"is not in the fault catalog")
@@ -70,3 +73,15 @@ class FaultRecords:
     def counters(self) -> dict:
         return {"faults_received": self.received, "faults_malformed": self.malformed,
                 "actuator_stray": self.stray}
+
+
+def fault_summary(engine, records: FaultRecords) -> dict:
+    """What a run's faults did, per unit, for its summary: the switches the fault engine made
+    (a scenario's [[failure]] entries and the FC's forwarded faults) and the FAULT records
+    (kind 11) read from the FC. Empty for a run without either, so a fault-free summary keeps
+    its keys."""
+    units = sorted({u for u, _ in engine.switched} | set(records.by_unit))
+    if not units:
+        return {}
+    return {u: {"on": engine.switched[(u, "on")], "off": engine.switched[(u, "off")],
+                "fault_records": records.by_unit[u]} for u in units}

@@ -92,7 +92,7 @@ Sensor defaults, with sources:
     then the [esc] keys battery_cells, battery_mah, battery_mohm, avionics_a): a 4S 3300 mAh
     LiPo of a 450 mm quad, 6.25 mOhm a cell, at 25 degC and full charge.
   - Open-circuit curve and the resistance's rise at low charge: Chen and Rincon-Mora, IEEE
-    Trans. Energy Conversion 21(2), 2006 (bridge/battery/cell.py).
+    Trans. Energy Conversion 21(2), 2006 (bridge/src/battery.h).
   - activation_kj_mol 35: the resistance's temperature law is Arrhenius, as PVsyst's Li-ion
     model after Lundgren (2016), whose "usual values are 30 to 40 kJ/mol" (pvsyst.com help,
     Internal resistance): the middle of that range.
@@ -204,6 +204,8 @@ SECTIONS = {
                                text="touchdown descent speed counted as a crash"),
         "crash_tilt_deg": F("float", 60.0, above=0, max=180, unit="deg",
                             text="tilt on the ground counted as a crash (tipped over)"),
+        "end_on_crash": F("bool", True, text="a crash ends the run; false: the physics goes on "
+                          "(the autopilot's crash check and disarm on the ground, bench F12)"),
     },
     "home": {
         "lat_deg": F("float", 47.397742, min=-89.9, max=89.9, unit="deg"),

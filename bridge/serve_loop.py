@@ -24,7 +24,7 @@ def stop_asked(stop) -> bool:
 
 def ended_by(sim, stop) -> str | None:
     """After a step: "crash" when the vehicle crashed, "stop" when stop() asks, else None."""
-    if sim.crashed:
+    if sim.crashed and sim.end_on_crash:
         return "crash"
     if stop_asked(stop):
         return "stop"

@@ -8,8 +8,8 @@ JSBSim, and returns that step's records (numpy RECORD_DTYPE; a view into a
 preallocated buffer, valid until the next call: copy it to keep it), in the
 contract's order: the step's IMU samples (oldest first), GT_ATT, GT_NAV, then
 BARO, MAG, GNSS if due, then SETPOINT if the profile changed, then the battery's
-BATTERY (10 Hz, bridge/battery/) and the ESC reports when due; the last record
-carries FLAG_STEP_END. Step k has sim_ns = k * dt_ns; oversampled IMU sample
+BATTERY (10 Hz, bridge/battery/, run by the kernel) and the ESC reports when due;
+the last record carries FLAG_STEP_END. Step k has sim_ns = k * dt_ns; oversampled IMU sample
 times are described in imu.py. Sequence numbers count per kind from 0.
 
 Motor order is ArduCopter quad X: 1 front-right CCW, 2 back-left CCW,
@@ -34,7 +34,7 @@ import math
 import numpy as np
 
 from silbridge.bridge import _step
-from silbridge.bridge.battery import Battery, MotorLoad
+from silbridge.bridge.battery import Battery
 from silbridge.bridge import esc_telemetry
 from silbridge.bridge import step_buffer as sb
 from silbridge.bridge import vibration_consts
@@ -79,10 +79,10 @@ class Simulator:
         self._estimate_hover()
         self._make_sensors(sc, block_rows)
         self._plan_imu_sampling()
-        self.battery, self.esc = self._make_power(sc)   # the pack; [esc] telemetry or None
+        self.battery = Battery(sc.battery, self._ambient_c, sc.esc)   # run by the kernel
         self.faults.register("battery", self.battery.applier)
         max_imu = -(-self.imu_hz // self.physics_hz) + 1
-        esc_slots = esc_telemetry.MOTORS if self.esc else 0
+        esc_slots = esc_telemetry.MOTORS if esc_telemetry.enabled(sc) else 0
         self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4 + esc_slots + 1)
         self._seq = [0] * len(Kind)   # records published per kind; the header seq is this mod 2^32
         self.kernel = self._make_kernel(kernel_cls)
@@ -90,6 +90,7 @@ class Simulator:
         self._hold_gnss = hasattr(self.kernel, "hold")
         self._held_rec = bytearray(64)
         self._attach_kernel()
+        self.esc = self._make_esc(sc)       # [esc] telemetry or None
         self._views = self.buffer._views
         self._prev6 = self._true6()
         self._update_next_slow()
@@ -141,6 +142,7 @@ class Simulator:
             raise SimulatorError(f"vibration.enabled reads the IMU chip once per physics step: "
                                  f"run at imu_hz = {self.physics_hz} (asked {self.imu_hz})")
         self._crash_descent_m_s = sc.physics.crash_descent_m_s
+        self.end_on_crash = bool(sc.physics.end_on_crash)   # the run loops stop at a crash
         self._cos_crash_tilt = math.cos(math.radians(sc.physics.crash_tilt_deg))
         self._flip_steps = int(_FLIP_LIMIT_S * self.physics_hz)
         # Hubs are within 0.23 m of the CG: below that height a strike is possible.
@@ -172,17 +174,19 @@ class Simulator:
             c["vib_accel"] = c["vib_gyro"] = 0.0
         return {**c, **vib}
 
-    def _make_power(self, sc):
-        """The battery pack and its load (bridge/battery/); the ESCs' telemetry on that pack
-        when the scenario asks for it ([esc] telemetry_hz), else None."""
+    def _attach_battery(self) -> None:
+        """The kernel runs the pack (bridge/battery/); its load reads the motors' torque."""
         pm = self.fdm.fdm.get_property_manager()
         torque = [pm.get_node(f"fcs/m{i}-torque-lbsft") for i in range(1, 5)]
-        load = MotorLoad(sc.esc, self.fdm.h_omega, torque)
-        battery = Battery(sc.battery, self._ambient_c, load)
+        self.battery.attach(self.kernel, self.fdm.h_omega, torque)
+
+    def _make_esc(self, sc):
+        """The ESCs' telemetry on the kernel's pack when the scenario asks for it ([esc]
+        telemetry_hz), else None."""
         if not esc_telemetry.enabled(sc):
-            return battery, None
-        return battery, esc_telemetry.EscTelemetry(sc.esc, self.physics_hz, self._ambient_c,
-                                                   load, battery.pack)
+            return None
+        return esc_telemetry.EscTelemetry(sc.esc, self.physics_hz, self._ambient_c,
+                                          self.battery.load, self.battery)
 
     def _make_kernel(self, kernel_cls):
         """The per-step kernel: it calls the bound methods of JSBSim's property nodes
@@ -208,6 +212,7 @@ class Simulator:
                              mc.noise_gauss)
         kernel.set_baro_block(self.baro.noise.next_block())
         kernel.set_mag_block(self.mag.noise.next_block())
+        self._attach_battery()
         fault_appliers.register_all(self)    # gnss, baro, mag, gyro, accel, motor faults
         if self._scalar_imu:
             kernel.set_block(*self.imu.next_scalar_block())
@@ -239,7 +244,7 @@ class Simulator:
                 "baro": baro, "mag": mag,
                 "gnss": s[Kind.GNSS] - (self.kernel.held if self._hold_gnss else 0),
                 "setpoint": s[Kind.SETPOINT],
-                **({"esc": s[Kind.ESC]} if self.esc else {}), "battery": s[Kind.BATTERY]}
+                **({"esc": s[Kind.ESC]} if self.esc else {}), "battery": self.battery.reports}
 
     # --- the step ---------------------------------------------------------------------
     def _disturb_before(self) -> int:
@@ -252,6 +257,9 @@ class Simulator:
             dist.update(k)
         if k == self.faults.next_step:
             self.faults.switch(k)
+        if self.faults.pollers:                # they follow the pack's reports too
+            kernel = self.kernel
+            kernel.next_slow_ns = min(kernel.next_slow_ns, self.battery.next_ns)
         return k
 
     def step(self, pwm_us) -> np.ndarray:
@@ -380,8 +388,7 @@ class Simulator:
                 cmd["roll_rad"], cmd["pitch_rad"] = s_roll, s_pitch
             if mask & 2:
                 cmd["alt_m"] = s_alt
-        if self.battery.due(sim_ns):
-            count += self.battery.write(buf.buf, count * 64, self._next_seq(Kind.BATTERY), sim_ns)
+        count += self.kernel.write_battery(count)   # a report due here: after GNSS, setpoint
         esc = self.esc
         if esc is not None and esc.due(sim_ns):
             n = esc.write(buf.buf, count * 64, self._seq[Kind.ESC], sim_ns)
@@ -404,7 +411,8 @@ class Simulator:
             kernel.hold(due_ns, rec)
 
     def _update_next_slow(self) -> None:
-        """Tell the kernel the sim time of the next GNSS or setpoint record."""
+        """Tell the kernel the sim time of the next GNSS, setpoint or ESC record (it writes
+        the battery's itself)."""
         due = [self.gnss.schedule.next_ns]
         if self.gnss.pending:
             due.append(self.gnss.pending[0][0])
@@ -412,7 +420,6 @@ class Simulator:
             due.append(self.setpoints.next_step * self.dt_ns)
         if self.esc is not None:
             due.append(self.esc.schedule.next_ns)
-        due.append(self.battery.schedule.next_ns)
         self.kernel.next_slow_ns = min(due)
 
     def _imu_count(self, k: int) -> int:

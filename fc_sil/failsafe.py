@@ -5,8 +5,13 @@ when its cause is gone, as ArduCopter's do. Actions are requests to the vehicle
 (``set_mode_internal``, ``failsafe_disarm``); the vehicle decides what a mode change means
 when it is on the ground (nothing: a landed vehicle only stays landed).
 
-* GCS: a HEARTBEAT from SYSID_MYGCS was seen and then none for FS_GCS_TIMEOUT (wall clock,
-  the link's own time) while armed and flying -> RTL (FS_GCS_ENABLE 1) or LAND (5).
+* GCS: a HEARTBEAT from SYSID_MYGCS was seen and then none for FS_GCS_TIMEOUT of sim time
+  while armed and flying -> RTL (FS_GCS_ENABLE 1) or LAND (5). Sim time as ArduCopter SITL,
+  whose millis() is its simulated clock: a lockstep run at --speed 10 meets the failsafe at
+  the same sim time as at --speed 1, and a ground station heartbeating at 1 Hz of wall time
+  is silent for `speed` sim seconds between beats (docs/reference/failsafes.md). FS_OPTIONS
+  may let the flight go on (fs_options.py; by default a pilot-flown mode goes on).
+* radio: radio_failsafe.py (pilot input lost or throttle below FS_THR_VALUE -> FS_THR_ENABLE).
 * sensors (sim time, SB_FS_SENS_TO): IMU stream lost -> motors to a safe state (disarm: the
   FC cannot stabilise without rates, and spinning motors under no control are the danger);
   barometer lost while flying -> LAND. GNSS loss is the EKF failsafe's, as in ArduCopter.
@@ -24,12 +29,14 @@ from __future__ import annotations
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from silbridge.mavlink.gcs.vehicle_api import CopterMode
-from silbridge.shm.records import Kind
+from silbridge.shm.records import NS_PER_S, Kind
 
 from .crash_check import CrashCheck
+from .fs_options import continuing
 from .ekf_check import EkfCheck
 from .gps_glitch import GpsGlitchCheck
 from .innov_ratios import InnovationRatios
+from .radio_failsafe import RadioFailsafe
 from .thrust_loss import ThrustLossCheck
 from .vibe_check import VibrationCheck
 from .yaw_imbalance import YawImbalanceCheck
@@ -37,9 +44,26 @@ from .yaw_imbalance import YawImbalanceCheck
 CRIT = mav.MAV_SEVERITY_CRITICAL
 
 
+class GcsSilence:
+    """Sim seconds since the last SYSID_MYGCS heartbeat (None: none heard yet). The server
+    thread counts the heartbeats; one counts from the vehicle step that first sees it, as
+    ArduCopter stamps last_heartbeat_ms when its main loop reads the message."""
+
+    def __init__(self):
+        self._heard = 0
+        self._at_ns: int | None = None
+
+    def update(self, heard: int, sim_ns: int) -> float | None:
+        if heard != self._heard:
+            self._heard, self._at_ns = heard, sim_ns
+        return None if self._at_ns is None else max(0, sim_ns - self._at_ns) / NS_PER_S
+
+
 class FailsafeMonitor:
     def __init__(self):
         self.gcs = False
+        self.gcs_silence = GcsSilence()
+        self.radio = RadioFailsafe()
         self.imu = False
         self.baro = False
         self.ratios = InnovationRatios()
@@ -62,8 +86,8 @@ class FailsafeMonitor:
     def check(self, v) -> None:
         self._check_sensors(v)
         self._check_estimator(v)
-        self._check_gcs(v)
         self._check_battery(v)
+        self.check_links(v)
 
     # ---- sensors ----------------------------------------------------------------------------
 
@@ -96,15 +120,21 @@ class FailsafeMonitor:
         self.yaw.check(v, self.thrust.boost)
         self.crash.check(v)
 
-    # ---- GCS --------------------------------------------------------------------------------
+    # ---- GCS and radio -----------------------------------------------------------------------
+
+    def check_links(self, v) -> None:
+        """The link failsafes alone (check() runs them with the others)."""
+        self._check_gcs(v)
+        self.radio.check(v)
 
     def _check_gcs(self, v) -> None:
         action = v.cfg.fs_gcs_enable
-        silent_s = v.gcs_silence_s()
+        heard = v.server.gcs_heartbeats if v.server is not None else 0
+        silent_s = self.gcs_silence.update(heard, v.sim_ns)
         if silent_s is None or action == 0:
             self.gcs = False
             return
-        lost = silent_s > v.cfg.fs_gcs_timeout_s and silent_s != float("inf")
+        lost = silent_s > v.cfg.fs_gcs_timeout_s
         if not lost:
             if self.gcs:
                 v.statustext(mav.MAV_SEVERITY_INFO, "GCS Failsafe Cleared")
@@ -113,8 +143,10 @@ class FailsafeMonitor:
         if self.gcs or not (v.armed and v.airborne):
             return
         self.gcs = True
-        v.statustext(CRIT, "GCS Failsafe")
-        self._act(v, 2 if action == 1 else 1, "GCS failsafe")
+        going_on = continuing("GCS", v.mode.number, int(v.store.host("FS_OPTIONS")))
+        v.statustext(CRIT, "GCS Failsafe" + (f" - {going_on}" if going_on else ""))
+        if not going_on:
+            self._act(v, 2 if action == 1 else 1, "GCS failsafe")
 
     # ---- battery ----------------------------------------------------------------------------
 

@@ -320,6 +320,16 @@ class FlightCore:
         """The frequencies [Hz] the harmonic notch's MODE 4 reads now, fundamental first."""
         return self._c.fft_notch_freqs(float(throttle_out))
 
+    def fft_calibration(self) -> tuple[float, float, float] | None:
+        """(sample kHz, half bin Hz, output Hz) of ArduCopter's "FFT: calibrated" text once
+        the noise reference is learned; None while the FFT is off or still learning."""
+        return self._c.fft_calibration()
+
+    def fft_esc_noise(self, dt_s: float) -> list[tuple[int, float, float]]:
+        """One FFT_OPTIONS bit 1 check (every 0.2 s, dt_s since the last): (motor 1.., SNR dB,
+        motor Hz) of each motor to warn about now (fc_fft_esc.c)."""
+        return self._c.fft_esc_noise(float(dt_s))
+
     # ---- system identification (SID_* parameters, fc_sysid.h) --------------
 
     def sysid_start(self) -> None:

@@ -65,7 +65,7 @@ class InnovationRatios:
 
     def _glitch_hysteresis(self, v) -> None:
         t = v.sim_ns
-        if not v.est.valid:
+        if not v.est.valid or self._pass_ns is None:    # (or the estimate was valid at once)
             self._pass_ns = self._fail_ns = t
             self.gps_glitching = False
             return

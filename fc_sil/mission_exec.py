@@ -38,6 +38,7 @@ from .mission_land import LandRun, RtlRun, TakeoffRun
 from .mission_nav import CircleRun, DelayRun, SplineRun, WaypointRun
 from .mission_seq import MissionCursor
 from .mission_yaw import MissionYaw
+from .nav_pos import shifted
 from .nav_spline import SplineLimits
 
 REL_FRAMES = frozenset({mav.MAV_FRAME_GLOBAL_RELATIVE_ALT, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
@@ -204,6 +205,14 @@ class MissionExecutor:
         it = self.items[nav]
         v.statustext(mav.MAV_SEVERITY_INFO, f"Mission: {nav} {TYPE_NAMES[it.command]}")
         self.nav = RUNNERS[it.command](self, v, nav, it)
+
+    def follow_xy_reset(self, d_ne) -> None:
+        """The estimate jumped (vehicle_nav.py): the hold after the mission and the running
+        command's "hold here" point move with it."""
+        if self.hold_ne is not None:
+            self.hold_ne = shifted(self.hold_ne, d_ne)
+        if self.nav is not None:
+            self.nav.follow_xy_reset(d_ne)
 
     def run(self, v, dt_s: float) -> None:
         self._v = v

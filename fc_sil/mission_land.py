@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from .mission_nav import Runner
 from .modes import RtlSequence
+from .nav_pos import shifted
 
 
 class TakeoffRun(Runner):
@@ -25,6 +26,9 @@ class TakeoffRun(Runner):
         self.already = v.airborne and v.alt_m >= self.alt_m - v.cfg.takeoff_done_m
         if not self.already:
             v.takeoff_in_progress = True
+
+    def follow_xy_reset(self, d_ne) -> None:
+        self.hold_ne = shifted(self.hold_ne, d_ne)
 
     def run(self, ex, v, dt_s):
         if self.already:             # ArduCopter skips the climb when already up there
@@ -43,13 +47,18 @@ class LandRun(Runner):
     def __init__(self, ex, v, index: int, it):
         ex.yaw.hold(v)
         ex.leg_end = None
-        if it.x == 0 and it.y == 0:
+        self.here = it.x == 0 and it.y == 0     # land where we are, not at a place
+        if self.here:
             self.ne = tuple(v.est.pos_ne_m)
             self.state = "land"
         else:
             self.ne = v.est.origin.to_ne(it.x, it.y)
             v.start_track(self.ne, v.alt_m, v.speed_override_m_s)
             self.state = "land_approach"
+
+    def follow_xy_reset(self, d_ne) -> None:
+        if self.here:
+            self.ne = shifted(self.ne, d_ne)
 
     def run(self, ex, v, dt_s):
         if self.state == "land_approach":

@@ -54,6 +54,9 @@ class Runner:
     def run(self, ex, v, dt_s: float) -> bool:
         raise NotImplementedError
 
+    def follow_xy_reset(self, d_ne) -> None:
+        """The estimate jumped by d_ne: move a "hold here" point (vehicle_nav.py)."""
+
 
 class HoldTimer:
     """A command's hold after arrival (p1 whole seconds)."""

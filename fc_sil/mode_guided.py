@@ -34,6 +34,7 @@ from .auto_yaw import (NO_YAW, AutoYaw, HeadingControl, YawConfig, YawMode, YawR
                        wrap_pi)
 from .modes import Mode
 from .nav_kinematics import advance_xy, shape_pos_vel_accel_xy
+from .nav_pos import shifted
 from silbridge.shm.records import NS_PER_S as _NS
 
 # GUID_OPTIONS bits (ArduCopter ModeGuided::Option)
@@ -116,6 +117,13 @@ class Guided(Mode):
         if getattr(self, "sub", None) == Sub.TAKEOFF and not self.takeoff_done:
             v.takeoff_in_progress = False
             v.alt_hold_m = v.alt_m
+
+    def follow_xy_reset(self, v, d_ne) -> None:
+        """The estimate jumped (vehicle_nav.py): the take-off's hold point and the shaped path
+        toward a destination move with it, as ArduCopter's position controller targets do;
+        the destination itself is a place and stays."""
+        self.hold_ne = shifted(self.hold_ne, d_ne)
+        self.pos_d = shifted(self.pos_d, d_ne)
 
     # ---- targets (called by vehicle_commands.py) -------------------------------------------
     def start_takeoff(self, v, alt_m: float) -> None:

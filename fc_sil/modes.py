@@ -25,6 +25,7 @@ import math
 from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 from .nav_loiter import LoiterNav
+from .nav_pos import shifted
 
 # ArduCopter's BRAKE_MODE_DECEL_RATE (750 cm/s^2): Brake stops harder than WPNAV_ACCEL
 BRAKE_DECEL_M_S2 = 7.5
@@ -48,6 +49,9 @@ class Mode:
 
     def run(self, v, dt_s: float) -> None:
         raise NotImplementedError
+
+    def follow_xy_reset(self, v, d_ne) -> None:
+        """The estimate jumped by d_ne (vehicle_nav.py): move "hold here" points with it."""
 
     @property
     def guided_enabled(self) -> bool:
@@ -128,6 +132,9 @@ class Auto(Mode):
 
     def run(self, v, dt_s):
         v.mission.run(v, dt_s)
+
+    def follow_xy_reset(self, v, d_ne) -> None:
+        v.mission.follow_xy_reset(d_ne)
 
 
 class Rtl(Mode):
@@ -221,6 +228,10 @@ class Land(Mode):
         self.pause_until_ns = -1
         if v.armed and not v.airborne:
             v.disarm_landed("LAND")
+
+    def follow_xy_reset(self, v, d_ne) -> None:
+        if self.hold_ne is not None:
+            self.hold_ne = shifted(self.hold_ne, d_ne)
 
     def pause(self, v) -> None:
         """A failsafe's LAND: hold the altitude LAND_WITH_DELAY_S first, as ArduCopter."""

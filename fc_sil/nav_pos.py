@@ -17,6 +17,9 @@ ArduCopter 4.6's AC_PosControl, horizontal half, at the outer-loop rate:
   pitch = -atan(a_forward / g) (nose down to go forward), roll = atan(a_right cos(pitch) / g).
 
 The integrator does not grow in the direction the acceleration limit clipped last step.
+When the estimate resets (pos_est.py: a GNSS glitch timed out), ``shift`` moves the targets
+by the reset's jump, so the errors the controller sees, and the vehicle, do not jump
+(AC_PosControl::handle_ekf_xy_reset keeps the target at the estimate plus the old error).
 Frames: NE metres about the estimator origin; m/s; m/s^2.
 """
 
@@ -89,6 +92,12 @@ class PosController:
         self._err_f = None
         self._deriv = (0.0, 0.0)
         self._integ = (self.accel_target[0] - ax, self.accel_target[1] - ay)
+
+    def shift(self, dpos_ne_m, dvel_ne_m_s=(0.0, 0.0)) -> None:
+        """The estimate jumped by dpos (and dvel): move the targets with it."""
+        self.pos_target = shifted(self.pos_target, dpos_ne_m)
+        self.vel_desired = shifted(self.vel_desired, dvel_ne_m_s)
+        self.vel_target = shifted(self.vel_target, dvel_ne_m_s)
 
     def set_pos_vel_accel(self, pos_ne_m, vel_ne_m_s, accel_ne_m_s2) -> None:
         """Targets from a path that is already kinematically shaped (or a fixed point)."""
@@ -179,6 +188,11 @@ class PosController:
         self._integ = (ix, iy)
         return (g.vel_p * fx + ix + g.vel_d * self._deriv[0] + g.vel_ff * vel_target[0],
                 g.vel_p * fy + iy + g.vel_d * self._deriv[1] + g.vel_ff * vel_target[1])
+
+
+def shifted(ne, d_ne) -> tuple[float, float]:
+    """A NE point moved by d_ne (an estimate reset's jump)."""
+    return (ne[0] + d_ne[0], ne[1] + d_ne[1])
 
 
 def accel_to_lean(an: float, ae: float, yaw_rad: float, angle_max_rad: float

@@ -12,6 +12,11 @@ A delayed-measurement complementary filter, per horizontal axis, run at the oute
   added to the stored history as well, so the next fix is not corrected twice.
 * gate (gnss_gate.py, EKF3's rules): a fix whose innovation fails its test ratio is not
   fused (a GNSS glitch); after the retry time the estimate resets to GNSS instead.
+* reset record: each reset counts (xy_reset_count) and keeps the shift it made to the
+  estimate (xy_reset_ne_m), as EKF3's getLastPosNorthEastReset; the position controller
+  and the modes' "hold here" points move by it (vehicle_nav.py), so the vehicle does not
+  fly the jump (ArduCopter's AC_PosControl::handle_ekf_xy_reset). The first fix starts the
+  estimate and is not a reset.
 
 Vertical: the C core's baro + accel filter (alt_est_m, climb_est_m_s, positive up above the
 arming point) is already the FC's vertical estimate; this module reports it in NED.
@@ -103,6 +108,9 @@ class PositionEstimator:
         self.last_fused_ns: int | None = None
         self.fixes_fused = 0
         self.fixes_rejected = 0
+        self.xy_reset_count = 0           # horizontal position resets so far
+        self.xy_reset_ne_m = (0.0, 0.0)   # the last reset's shift of the position [m]
+        self.xy_reset_vel_ne_m_s = (0.0, 0.0)  # its shift of the velocity (0 unless reset)
         self.gate = GnssGate()
         self._hist: collections.deque = collections.deque()   # (sim_ns, pn, pe, vn, ve)
 
@@ -180,7 +188,12 @@ class PositionEstimator:
         # bias learns ~10x slower than the velocity correction (keeps the loop well damped)
         kb = 0.0 if not d.fuse_vel else \
             min(1.0, dt_fix / (10.0 * self.vel_tc_s * self.vel_tc_s)) * d.vel_scale
-        self._correct((kp * e_p[0], kp * e_p[1]), (kv * e_v[0], kv * e_v[1]), kb, e_v)
+        dp, dv = (kp * e_p[0], kp * e_p[1]), (kv * e_v[0], kv * e_v[1])
+        self._correct(dp, dv, kb, e_v)
+        if d.reset_pos:
+            self.xy_reset_count += 1
+            self.xy_reset_ne_m = dp
+            self.xy_reset_vel_ne_m_s = dv if d.reset_vel else (0.0, 0.0)
         self.fixes_fused += 1
         return True
 

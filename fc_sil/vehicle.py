@@ -39,6 +39,7 @@ from . import modes as M
 from .autodec import AutoDeclination
 from .battery import BatteryMonitor
 from .failsafe import FailsafeMonitor
+from .fft_notice import FftNotices
 from .gnss_gate import GateConfig
 from .fault_inject import FaultInjector
 from .fence import Geofence
@@ -87,6 +88,7 @@ class Vehicle(NavHelpers, GcsCommands):
         self.wp = WaypointNav(self.cfg.wp)
         self.battery = BatteryMonitor(self.cfg.battery)   # the bridge's pack (BATTERY records)
         self.failsafe = FailsafeMonitor()
+        self.fft_notices = FftNotices()     # the FFT's STATUSTEXTs (fft_notice.py)
         self.mission = MissionExecutor()
         self.pilot = PilotInput()
         self.fence = Geofence()             # fence.py: FENCE_* and the uploaded fence
@@ -137,7 +139,6 @@ class Vehicle(NavHelpers, GcsCommands):
         self.guided_att = None
         self.mode: M.Mode = M.Stabilize()
         self.setpoints_ignored = 0
-        self._rc_fs = False               # radio failsafe latched
         self.custom_version = _git_hash()
         self._load_window = (time.monotonic_ns(), 0, 0)    # (wall start, step ns, permille)
         # Failure injection (fault_inject.py): MAV_CMD_INJECT_FAILURE, SIM_* parameters and a
@@ -179,9 +180,10 @@ class Vehicle(NavHelpers, GcsCommands):
             self.server.service()
         self._read_core()
         self._estimate(dt_s)
+        self.follow_xy_reset()
         self.battery.read(self.core)
         self.failsafe.check(self)
-        self._radio_failsafe()
+        self.fft_notices.check(self)
         self.fence.check(self)
         self._read_mode_switch()
         self.landing = False
@@ -318,14 +320,7 @@ class Vehicle(NavHelpers, GcsCommands):
 
     @property
     def radio_failsafe_active(self) -> bool:
-        return self._rc_fs
-
-    def gcs_silence_s(self) -> float | None:
-        """Seconds since the last SYSID_MYGCS heartbeat; None without a server or GCS."""
-        if self.server is None:
-            return None
-        s = self.server.seconds_since_gcs_heartbeat()
-        return None if s == float("inf") else s
+        return self.failsafe.radio.active
 
     # ---- outputs -------------------------------------------------------------------------
 

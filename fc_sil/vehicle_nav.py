@@ -14,6 +14,16 @@ friction) and leaves lean angles for the step's single attitude command; ``start
 ``fly_track`` fly a straight leg along its S-curve (nav_wp.py); ``fly_loiter`` turns the
 sticks into shaped targets (nav_loiter.py). As AC_PosControl, a position controller that was
 not run for a few steps starts again from the vehicle's present position and velocity.
+
+Estimate resets: ``follow_xy_reset`` runs each step after the estimator; when the estimate
+reset (pos_est.py: GNSS that failed its gate for the retry time is taken as it is), the
+position controller's targets and the mode's "hold here" points move by the same jump, so
+the vehicle stays where it is and holds on the new frame (ArduCopter 4.6: AC_PosControl's
+handle_ekf_xy_reset, for Loiter, PosHold, Brake, Land, take-off and Guided velocity
+control). Points given as coordinates (waypoints, a Guided destination, home) stay: they
+name a place, and the reset has made the estimate of where that place is better or worse,
+not moved it. Our vertical estimate (the C core's baro + accel filter) never resets in
+flight, so there is no vertical counterpart.
 """
 
 from __future__ import annotations
@@ -22,8 +32,6 @@ import dataclasses
 import math
 
 from pymavlink.dialects.v20 import ardupilotmega as mav
-
-from silbridge.mavlink.gcs.vehicle_api import CopterMode
 
 from .nav_loiter import CORRECTION_POS_M, CORRECTION_SPEED_M_S, LoiterNav
 from .nav_pos import lean_to_accel
@@ -34,6 +42,16 @@ _ACTIVE_STEPS = 5
 
 
 class NavHelpers:
+    _xy_resets_seen = 0     # the estimator's xy_reset_count already followed
+
+    def follow_xy_reset(self) -> None:
+        """Move the horizontal targets by the estimate's reset, once per reset."""
+        est = self.est
+        if est.xy_reset_count == self._xy_resets_seen:
+            return
+        self._xy_resets_seen = est.xy_reset_count
+        self.pos_ctl.shift(est.xy_reset_ne_m, est.xy_reset_vel_ne_m_s)
+        self.mode.follow_xy_reset(self, est.xy_reset_ne_m)
 
     def _wp_speeds(self, speed_m_s: float | None) -> WpSpeeds:
         sp = self.cfg.wp
@@ -209,26 +227,6 @@ class NavHelpers:
             self.command_climb(dt_s, (z - 0.4) / 0.4 * self.cfg.pilot_speed_dn_m_s)
         else:
             self.command_vertical(dt_s, self.alt_hold_m)
-
-    def _radio_failsafe(self) -> None:
-        """Pilot input lost for RC_FS_TIMEOUT, or the throttle channel below FS_THR_VALUE
-        (rc_input.py), while a manual mode flies: FS_THR_ENABLE's action (0 = none)."""
-        age = self.pilot.age_s()
-        thr_us = self.pilot.throttle_pwm()
-        low = thr_us is not None and thr_us < self.pilot.rc.fs_thr_value_us
-        if age is None or (age <= self.cfg.rc_fs_timeout_s and not low):
-            self._rc_fs = False
-            return
-        if self._rc_fs:
-            return
-        self._rc_fs = True
-        action = self.pilot.rc.fs_thr_action()
-        if action is not None and self.armed and self.airborne and self.mode.number in (
-                CopterMode.STABILIZE, CopterMode.ALT_HOLD, CopterMode.LOITER):
-            self.statustext(mav.MAV_SEVERITY_CRITICAL, "Radio Failsafe")
-            if action == CopterMode.RTL and not (self.home_set and self.position_ok()):
-                action = CopterMode.LAND
-            self.set_mode_internal(action, "radio failsafe")
 
     def _read_mode_switch(self) -> None:
         """FLTMODE_CH's switch position selects FLTMODE1..6 (rc_input.py), once per move."""

@@ -24,6 +24,7 @@ Every switch is an event (sim_ns, text) in the simulator's event list.
 from __future__ import annotations
 
 import heapq
+from collections import Counter
 from dataclasses import dataclass
 
 from silbridge.bridge.disturbances import step_starting_at
@@ -96,6 +97,7 @@ class FaultEngine:
         self.on_event = on_event
         self._appliers: dict[str, object] = {}
         self._active: dict[tuple, ActiveFault] = {}
+        self.switched: Counter = Counter()      # (unit, "on" | "off") -> switches made
         self._owner: dict[tuple, int | None] = {}   # key -> the [[failure]] that set it last
         switches = []
         for i, e in enumerate(failures):
@@ -210,6 +212,8 @@ class FaultEngine:
                     self._active.pop(fault.key, None)
                     raise
         state = "on" if on else ("off" if old is not None else "off (was not on)")
+        if on or old is not None:
+            self.switched[(fault.unit, "on" if on else "off")] += 1
         self.on_event(sim_ns, f"{source} {state}: {describe(fault if on else (old or fault))}")
 
     def _update_next(self) -> None:

@@ -1,8 +1,9 @@
 /*
  * sensor_stage.c - see sensor_stage.h. One step: convert the FDM sample to SI truth,
  * write the scalar IMU record, the ground truth, leave the state for Python, judge
- * contact and crashes, then the baro and magnetometer records when due. The order of
- * the records is the contract's (GNSS and SETPOINT follow from Python); every
+ * contact and crashes, then the baro and magnetometer records when due, the held GNSS
+ * fixes and the battery's report (battery.h). The order of the records is the contract's
+ * (on a step Python finishes, its GNSS and SETPOINT come before the battery's); every
  * expression keeps the association of the Python oracle.
  */
 #include "sensor_stage.h"
@@ -458,6 +459,11 @@ long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t s
     }
     if (s->held.n > 0 && (f = write_held(s, slots, n_slots, &slot, sim_ns)) < 0)
         return f;
+    if (sb_sensor_stage_pack_due(s, sim_ns)) {
+        if (slot >= n_slots)
+            return SB_STAGE_BUFFER_FULL;
+        sb_pack_report(&s->pack, &slots[slot++], sim_ns);
+    }
     if (sim_ns >= s->next_slow_ns)
         flags |= F_SLOW_DUE;
     else   /* nothing more this step: the last record closes it */

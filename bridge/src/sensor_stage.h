@@ -1,7 +1,8 @@
 /*
  * sensor_stage.h - the bridge's sensor stage in plain C: one FDM sample (what JSBSim
  * holds after a physics step) in, the step's records out (scalar IMU, GT_ATT, GT_NAV,
- * then baro and magnetometer when due), with the crash and contact flags Python acts on.
+ * then baro and magnetometer when due, held GNSS fixes, the battery's report), with the
+ * crash and contact flags Python acts on.
  *
  * No Python and no JSBSim here, as PX4 keeps RateControl free of topics: the CPython
  * shim (step_run.c) runs JSBSim, fills an sb_fdm_sample through the field table below
@@ -18,6 +19,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "battery.h"
 #include "imu_chip.h"
 #include "imu_raw.h"
 #include "sb_records.h"
@@ -158,6 +160,7 @@ typedef struct {
     sb_imu_raw raw;           /* the chip's ODR samples for the log, when bound (imu_raw.h) */
     sb_held held;             /* records waiting for their release step */
     sb_sensor_faults faults;  /* issue 28's sensor faults (all off: one test per sample) */
+    sb_pack pack;             /* the physics-side battery, once configured (battery.h) */
 } sb_sensor_stage;
 
 /* A defined stage: no noise yet, sensors off, counters at 0. */
@@ -194,6 +197,15 @@ static inline size_t sb_sensor_stage_optional(const sb_sensor_stage *s, int64_t 
 {
     return sb_sensor_stage_baro_due(s, sim_ns) ? (size_t)-1
                                                 : offsetof(sb_fdm_sample, temperature_r);
+}
+
+/* 1 when the stage writes the battery's report at sim_ns: it is due and the step is not
+ * one Python finishes (F_SLOW_DUE: Python writes it then, after its GNSS and setpoint
+ * records, through Kernel.write_battery, so the record order is the contract's). The
+ * caller sets pack.esc_w, the ESCs' power after the step, before sb_sensor_stage_step. */
+static inline int sb_sensor_stage_pack_due(const sb_sensor_stage *s, int64_t sim_ns)
+{
+    return sb_pack_due(&s->pack, sim_ns) && sim_ns < s->next_slow_ns;
 }
 
 /* What a negative return means and what the caller must do. */

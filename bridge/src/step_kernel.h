@@ -73,6 +73,7 @@ typedef struct {
     int n_force_frames;
     sb_batch batch;           /* bind_lockstep(): the in-process lockstep batch */
     Py_buffer raw_view;       /* bind_imu_raw(): the chip's ODR rows (step_raw.c) */
+    sb_call pack_torque[4];   /* configure_battery(): bound getters of fcs/m1..4-torque-lbsft */
 } Kernel;
 
 /* stepmodule.c */
@@ -120,6 +121,16 @@ PyObject *Kernel_set_baro_fault(Kernel *self, PyObject *args, PyObject *kwds);
 PyObject *Kernel_set_mag_fault(Kernel *self, PyObject *args, PyObject *kwds);
 PyObject *Kernel_set_fault_seed(Kernel *self, PyObject *arg);
 PyObject *Kernel_set_imbalance_scale(Kernel *self, PyObject *args);
+
+/* step_battery.c: the physics-side battery (battery.h) run by the step */
+PyObject *Kernel_configure_battery(Kernel *self, PyObject *args, PyObject *kwds);
+PyObject *Kernel_write_battery(Kernel *self, PyObject *arg);
+PyObject *Kernel_battery_state(Kernel *self, PyObject *unused);
+PyObject *Kernel_battery_solve(Kernel *self, PyObject *arg);
+PyObject *Kernel_battery_esc_power(Kernel *self, PyObject *omega);
+PyObject *Kernel_set_battery_cell(Kernel *self, PyObject *args);
+PyObject *Kernel_battery_lose_charge(Kernel *self, PyObject *arg);
+int sb_step_pack_load(Kernel *self, const double omega_rad_s[4]);
 
 /* step_json.c: the module-level json_reply (ArduPilot SITL's JSON state line). */
 extern PyMethodDef sb_step_json_methods[];

@@ -88,6 +88,10 @@ long sb_step_run_items(Kernel *self, PyObject *const *pwm, Py_ssize_t first)
     sb_fdm_sample in;
     if (advance_fdm(self, pwm, &in) < 0)
         return -1;
+    /* The battery's load, on its report steps only (4 torque getters, 1 step in 100). */
+    if (sb_sensor_stage_pack_due(&self->stage, self->step_index * self->dt_ns) &&
+        sb_step_pack_load(self, in.omega_rad_s) < 0)
+        return -1;
     const long flags = sb_sensor_stage_step(&self->stage, &in, self->step_index * self->dt_ns,
                                             self->slots, (size_t)self->n_slots, (size_t)first);
     if (flags < 0)

@@ -36,6 +36,8 @@ static int Kernel_traverse(Kernel *self, visitproc visit, void *arg)
     Py_VISIT(self->run.obj);
     for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++)
         Py_VISIT(self->getters[i].obj);
+    for (int i = 0; i < 4; i++)
+        Py_VISIT(self->pack_torque[i].obj);
     return sb_batch_traverse(&self->batch, visit, arg);
 }
 
@@ -46,6 +48,8 @@ static int Kernel_clear(Kernel *self)
     sb_call_clear(&self->run);
     for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++)
         sb_call_clear(&self->getters[i]);
+    for (int i = 0; i < 4; i++)
+        sb_call_clear(&self->pack_torque[i]);
     sb_step_clear_forces(self);
     sb_batch_clear(&self->batch);
     return 0;
@@ -311,6 +315,22 @@ static PyMethodDef Kernel_methods[] = {
      "set_mag_fault(off, offset_gauss): the magnetometer silent, its offset"},
     {"set_fault_seed", (PyCFunction)Kernel_set_fault_seed, METH_O,
      "set_fault_seed(seed): the noisy-axis faults' generator"},
+    {"configure_battery", (PyCFunction)(void (*)(void))Kernel_configure_battery,
+     METH_VARARGS | METH_KEYWORDS,
+     "configure_battery(torque, cells, capacity_mah, ...): the pack the step runs (battery.h)"},
+    {"write_battery", (PyCFunction)Kernel_write_battery, METH_O,
+     "write_battery(slot) -> records written (0, 1): the due report on a step Python finishes"},
+    {"battery_state", (PyCFunction)Kernel_battery_state, METH_NOARGS,
+     "battery_state() -> (voltage_v, current_a, consumed_mah, remaining, temperature_c, "
+     "lowest_cell_v, reports, next_ns) at the last report"},
+    {"battery_solve", (PyCFunction)Kernel_battery_solve, METH_O,
+     "battery_solve(esc_w) -> (voltage_v, current_a): the pack under that load now"},
+    {"battery_esc_power", (PyCFunction)Kernel_battery_esc_power, METH_O,
+     "battery_esc_power(omega_rad_s 4) -> each ESC's input power now [W]"},
+    {"set_battery_cell", (PyCFunction)Kernel_set_battery_cell, METH_VARARGS,
+     "set_battery_cell(cell, offset_v, r_scale): a weak cell (0.0, 1.0: healthy)"},
+    {"battery_lose_charge", (PyCFunction)Kernel_battery_lose_charge, METH_O,
+     "battery_lose_charge(fraction): that fraction of every cell's charge gone"},
     {"set_imbalance_scale", (PyCFunction)Kernel_set_imbalance_scale, METH_VARARGS,
      "set_imbalance_scale(motor 0..3, scale): a damaged prop's vibration"},
     {NULL, NULL, 0, NULL}};

@@ -13,6 +13,8 @@
 #include "fc_status.h"
 
 #define FC_ESC_MAX 8
+/* A report older than this is stale: its motor counts as 0 Hz (ArduPilot's ESC_RPM_DATA_TIMEOUT_US) */
+#define FC_ESC_RPM_TIMEOUT_NS 1000000000LL
 
 typedef struct fc_esc_report {
     int64_t sim_ns;          /* time of the report [ns]; -1: never reported */

@@ -129,6 +129,7 @@ static void restart(fc_fft_t *f)
     memset(f->ref_energy, 0, sizeof f->ref_energy);
     memset(f->track, 0, sizeof f->track);
     memset(f->frame_slot, 0, sizeof f->frame_slot);
+    memset(f->slot_snr_db, 0, sizeof f->slot_snr_db);
     f->pushed = 0;
     f->decim_count = 0;
     f->phase = FC_FFT_PHASE_IDLE;
@@ -203,6 +204,8 @@ void fc_fft_init(fc_fft_t *f, const fc_fft_config_t *cfg, float sample_hz, float
     f->cfg.num_frames = 0;
     f->last_units = 0;
     f->max_units = 0;
+    /* the motor-noise check's filters and clock run from boot (AP_Vehicle's), not per restart */
+    memset(&f->esc_noise, 0, sizeof f->esc_noise);
     fc_fft_configure(f, cfg, sample_hz, loop_hz);
 }
 

@@ -21,14 +21,15 @@
  * a +-2000 deg/s gyro, _gyro_raw_sampling_multiplier), so FFT_SNR_REF, FFT_ATT_REF and
  * the energies in FTN2 mean what they mean in an ArduCopter log.
  *
- * Where it differs from AP_GyroFFT, and why: FFT_OPTIONS bit 1 (ESC-telemetry noise
- * check) is accepted and ignored; health (FH) counts the roll and pitch axes only (the
- * frequency never uses yaw, whose quiet frames made ArduPilot's flicker); frequencies stay
- * float (DSP::calc_frequency truncates to whole Hz); energy and bandwidth are low-passed
- * without the median ArduPilot 4.6 puts before them; with FFT_NUM_FRAMES the average is per
- * axis (ArduPilot's sliding window is shared by the round-robin axes). Pure C, float32, no heap, no globals; buffers are sized for
- * FC_FFT_MAX_WINDOW (a board with less RAM builds with -DFC_FFT_MAX_WINDOW=256, as
- * ArduPilot caps non-H7 boards).
+ * Where it differs from AP_GyroFFT, and why: health (FH) counts the roll and pitch axes
+ * only (the frequency never uses yaw, whose quiet frames made ArduPilot's flicker);
+ * frequencies stay float (DSP::calc_frequency truncates to whole Hz); energy and bandwidth
+ * are low-passed without the median ArduPilot 4.6 puts before them; with FFT_NUM_FRAMES the
+ * average is per axis (ArduPilot's sliding window is shared by the round-robin axes); no
+ * self-test of every bin before the calibration text (the transform is the one
+ * tests/fc_sil/test_fft.py checks against numpy). Pure C, float32, no heap, no globals;
+ * buffers are sized for FC_FFT_MAX_WINDOW (a board with less RAM builds with
+ * -DFC_FFT_MAX_WINDOW=256, as ArduPilot caps non-H7 boards).
  */
 #ifndef FC_FFT_H
 #define FC_FFT_H
@@ -53,7 +54,8 @@
 
 /* FFT_OPTIONS bits (ArduCopter 4.6) */
 #define FC_FFT_OPT_POST_FILTER 0x1u  /* analyse the gyro after the notches and low-pass */
-#define FC_FFT_OPT_ESC_CHECK 0x2u    /* ESC noise check: accepted, not implemented */
+#define FC_FFT_OPT_ESC_CHECK 0x2u    /* warn of noise at an ESC-reported motor frequency
+                                        * (with bit 0 and no FFT-driven notch; fc_fft_esc.c) */
 
 /* Peak slots, ArduPilot's FrequencyPeak: the strongest, the second, the third. */
 enum { FC_FFT_CENTER = 0, FC_FFT_LOWER = 1, FC_FFT_UPPER = 2 };
@@ -96,6 +98,22 @@ typedef struct fc_fft_found {
     float freq_hz;            /* interpolated [Hz] */
     float width_hz;           /* -FFT_ATT_REF dB width [Hz] */
 } fc_fft_found_t;
+
+/* FFT_OPTIONS bit 1, ArduCopter's motor-noise check (AP_Vehicle::check_motor_noise): the
+ * SNR the post-filter FFT sees at each ESC-reported motor frequency, low-passed per motor. */
+#define FC_FFT_ESC_MAX 8          /* motors checked (the core's FC_ESC_MAX) */
+typedef struct fc_fft_esc_noise {
+    float energy_db[FC_FFT_ESC_MAX]; /* low-passed SNR at each motor's frequency [dB] */
+    bool seen[FC_FFT_ESC_MAX];       /* the motor's filter holds a value (the first sets it) */
+    float since_warning_s;           /* since the last warning, or since init [s] */
+} fc_fft_esc_noise_t;
+
+/* What ArduCopter's "FFT: calibrated %.1fKHz/%.1fHz/%.1fHz" reports (AP_GyroFFT::pre_arm_check). */
+typedef struct fc_fft_calibration {
+    float sample_khz;         /* FFT sample rate, whole Hz as ArduPilot keeps it, in kHz */
+    float half_bin_hz;        /* half a bin: the worst frequency error of the search [Hz] */
+    float output_hz;          /* frames per second over the three axes [Hz] */
+} fc_fft_calibration_t;
 
 typedef struct fc_fft {
     fc_fft_config_t cfg;
@@ -147,6 +165,8 @@ typedef struct fc_fft {
     uint8_t distorted[FC_FFT_AXES];    /* slot swaps still allowed (AP _distorted_cycles) */
     float harmonic_fit[FC_FFT_AXES];   /* filtered fit [%] (100 = none) */
     float snr_db[FC_FFT_AXES];         /* SNR of the strongest peak, latest frame [dB] */
+    /* SNR of the latest frame's peaks, strongest first, as slots (AP update_snr_values) [dB] */
+    float slot_snr_db[FC_FFT_AXES][FC_FFT_MAX_PEAKS];
     uint8_t peaks[FC_FFT_AXES];        /* peaks (valid or held) in each axis' latest frame */
     uint32_t good_at[FC_FFT_AXES];     /* `pushed` at the last frame with a peak, +1 (0 never) */
     uint32_t output_at[FC_FFT_AXES];   /* `pushed` at each axis' latest output */
@@ -155,6 +175,7 @@ typedef struct fc_fft {
     /* hover learning (FFT_FREQ_HOVER, FFT_BW_HOVER, FFT_THR_REF), saved on disarm */
     float freq_hover_hz, bw_hover_hz, thr_ref;
     bool learned;             /* hover values moved since the last save */
+    fc_fft_esc_noise_t esc_noise;      /* FFT_OPTIONS bit 1's state (fc_fft_esc.c) */
     /* the work-spread account (tests, bench) */
     uint32_t last_units;      /* units done by the latest fc_fft_step */
     uint32_t max_units;       /* the most in one call since init */
@@ -201,5 +222,19 @@ void fc_fft_update_freq_hover(fc_fft_t *f, float dt_s, float throttle_out);
 void fc_fft_ftn1(const fc_fft_t *f, float throttle_out, fc_fft_ftn1_t *out);
 void fc_fft_ftn2(const fc_fft_t *f, unsigned slot, float pk_hz[3], float bw_hz[3],
                  float energy[3]);
+/* The three figures of ArduCopter's calibration text, as it computes them. */
+void fc_fft_calibration(const fc_fft_t *f, fc_fft_calibration_t *out);
+
+/* AP_GyroFFT::has_noise_at_frequency_hz: the highest SNR [dB] of a tracked peak within one
+ * bin of hz on a healthy axis; 0 when none (or the FFT is off). */
+float fc_fft_noise_at_hz(const fc_fft_t *f, float hz);
+/* FFT_OPTIONS bit 1: one check, to be called every FC_FFT_ESC_CHECK_S (ArduCopter's 5 Hz
+ * task). motor_hz[i]: motor i's ESC-reported frequency [Hz], 0 for none or stale.
+ * Checks only while armed, with FFT_OPTIONS bits 0 and 1, and with no notch following the
+ * FFT (fft_notch false). Returns the motors to warn about now (bit i: motor i), their
+ * energies in f->esc_noise.energy_db. */
+#define FC_FFT_ESC_CHECK_S 0.2f
+unsigned fc_fft_esc_noise_check(fc_fft_t *f, const float *motor_hz, unsigned n, bool armed,
+                                bool fft_notch, float dt_s);
 
 #endif /* FC_FFT_H */

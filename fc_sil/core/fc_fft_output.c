@@ -1,7 +1,9 @@
 /*
  * fc_fft_output.c - what the in-flight FFT hands out: the notch's MODE 4 frequencies,
- * FTN1/FTN2, and hover learning (AP_GyroFFT's get_* and update_freq_hover, rewritten;
- * see fc_fft.h). Reads only: the analysis itself never depends on these.
+ * FTN1/FTN2, the calibration text's figures, the noise at a given frequency, and hover
+ * learning (AP_GyroFFT's get_*, pre_arm_check's text, has_noise_at_frequency_hz and
+ * update_freq_hover, rewritten; see fc_fft.h). Reads only, but for hover learning: the
+ * analysis itself never depends on these.
  */
 #include "fc_fft_peaks.h"
 
@@ -192,4 +194,39 @@ void fc_fft_ftn2(const fc_fft_t *f, unsigned slot, float pk_hz[3], float bw_hz[3
         bw_hz[a] = f->track[a][s].bw_hz;
         energy[a] = f->track[a][s].energy;
     }
+}
+
+void fc_fft_calibration(const fc_fft_t *f, fc_fft_calibration_t *out)
+{
+    if (!f->active) {
+        *out = (fc_fft_calibration_t){0.0f, 0.0f, 0.0f};
+        return;
+    }
+    /* ArduPilot holds the sample rate and a frame's time in whole units (uint16 Hz and ms,
+     * the latter truncated), so its output rate is 3000 / whole ms, not fs * 3 / hop:
+     * 1 kHz with 16-sample frames reports 187.5 Hz, and 1.2 kHz 230.8 Hz (13 ms) */
+    const unsigned fs_hz = (unsigned)lrintf(f->fs_hz);
+    const unsigned frame_ms = fs_hz > 0u ? (unsigned)f->hop * 1000u / fs_hz : 0u;
+    out->sample_khz = (float)fs_hz * 0.001f;
+    out->half_bin_hz = f->bin_hz * 0.5f;
+    out->output_hz = frame_ms > 0u ? 1000.0f * (float)FC_FFT_AXES / (float)frame_ms : INFINITY;
+}
+
+float fc_fft_noise_at_hz(const fc_fft_t *f, float hz)
+{
+    if (!f->active) {
+        return 0.0f;
+    }
+    float snr_db = 0.0f;
+    for (unsigned p = 0; p < f->tracked_peaks && p < FC_FFT_MAX_PEAKS; p++) {
+        for (int a = 0; a < FC_FFT_AXES; a++) {
+            const float at_hz = f->track[a][p].freq_hz;
+            /* one bin either side, and only where the axis has a live peak */
+            if (axis_healthy(f, a) && fabsf(at_hz - hz) < f->bin_hz
+                && f->slot_snr_db[a][p] > snr_db) {
+                snr_db = f->slot_snr_db[a][p];
+            }
+        }
+    }
+    return snr_db;
 }

@@ -112,6 +112,16 @@ static int closest_peak(const fc_fft_t *f, const frame_peaks_t *fp, int target, 
     return (ignore & (1u << best)) ? FC_FFT_NONE : best;
 }
 
+/* update_snr_values: each slot shows the SNR of the frame's peak of its rank (strongest
+ * first), whichever peak the slot took; FTN1's SnX..Z is the strongest's. */
+static void record_snr(fc_fft_t *f, const frame_peaks_t *fp)
+{
+    for (int i = 0; i < FC_FFT_MAX_PEAKS; i++) {
+        f->slot_snr_db[f->axis][i] = fp->snr_db[i];
+    }
+    f->snr_db[f->axis] = fp->snr_db[FC_FFT_CENTER];
+}
+
 /* calculate_tracking_peaks: the peaks come strongest first, but two of similar strength
  * swap places from frame to frame; a slot follows the peak nearest its own frequency,
  * for a few frames at a time (the distorted-cycle budget), so the tracks stay continuous. */
@@ -127,14 +137,14 @@ static int track_peaks(fc_fft_t *f, const frame_peaks_t *fp)
         n += (l != FC_FFT_NONE) && update_slot(f, FC_FFT_LOWER, l, fp);
         n += (u != FC_FFT_NONE) && update_slot(f, FC_FFT_UPPER, u, fp);
         n += (c != FC_FFT_NONE) && update_slot(f, FC_FFT_CENTER, c, fp);
-        f->snr_db[a] = c != FC_FFT_NONE ? fp->snr_db[c] : 0.0f;
+        record_snr(f, fp);
         f->distorted[a]--;
         return n;
     }
     n += update_slot(f, FC_FFT_LOWER, FC_FFT_LOWER, fp);
     n += update_slot(f, FC_FFT_UPPER, FC_FFT_UPPER, fp);
     n += update_slot(f, FC_FFT_CENTER, FC_FFT_CENTER, fp);
-    f->snr_db[a] = fp->snr_db[FC_FFT_CENTER];
+    record_snr(f, fp);
     if (f->distorted[a] < FC_FFT_MAX_MISSED) {
         f->distorted[a]++;
     }

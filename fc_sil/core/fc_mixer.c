@@ -4,6 +4,7 @@
 #include "fc_mixer.h"
 
 #include "fc_math.h"
+#include "fc_mixer_sat.h"
 
 const float fc_mixer_roll_factor[FC_MIXER_MOTORS] = {-1.0f, 1.0f, 1.0f, -1.0f};
 const float fc_mixer_pitch_factor[FC_MIXER_MOTORS] = {1.0f, -1.0f, 1.0f, -1.0f};
@@ -55,7 +56,8 @@ static void band_throttle(mix_work_t *w, float thr)
 }
 
 /* Roll and pitch first: scale both down together if they need more than the
- * span; then the throttle gives way so that they fit. */
+ * span (around the collective fc_mixer_sat.h chooses); then the throttle gives
+ * way so that they fit. */
 static void fit_roll_pitch(mix_work_t *w)
 {
     const float span = w->hi - w->lo;
@@ -67,7 +69,9 @@ static void fit_roll_pitch(mix_work_t *w)
         w->rp_min = fminf(w->rp_min, w->rp[i]);
     }
     if (w->rp_max - w->rp_min > span) {
-        const float scale = span / (w->rp_max - w->rp_min);
+        /* fc_mixer_sat.h: the collective follows the demand, as ArduCopter's rpy_scale */
+        const float c = fc_mixer_sat_collective(w->t, w->lo, w->hi);
+        const float scale = fc_mixer_sat_scale(c, w->lo, w->hi, w->rp_min, w->rp_max);
         w->cr *= scale;
         w->cp *= scale;
         for (int i = 0; i < FC_MIXER_MOTORS; i++) {

@@ -15,7 +15,8 @@
  *
  * Inputs are in us: throttle about MOT_PWM_MIN..MAX, cr/cp/cy offsets about 0.
  * Priorities as ArduCopter: roll/pitch first (scaled down together when they
- * need more than the range: roll+pitch flags), then yaw (limited to the room
+ * need more than the range, around the demanded collective within limits,
+ * fc_mixer_sat.h: roll+pitch flags), then yaw (limited to the room
  * left, but never below MOT_YAW_HEADROOM: yaw flag), then throttle gives way
  * (throttle flags). The flags go back to the rate loop (no integrator growth)
  * and the altitude loop.

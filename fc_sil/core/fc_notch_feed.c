@@ -7,7 +7,7 @@
 
 /* ESC telemetry older than this is stale (ArduPilot's ESC_RPM_DATA_TIMEOUT_US):
  * a stale motor counts as 0 Hz, which the notch holds at its floor. */
-#define FC_NOTCH_ESC_TIMEOUT_NS 1000000000LL
+#define FC_NOTCH_ESC_TIMEOUT_NS FC_ESC_RPM_TIMEOUT_NS
 
 /* Rotor frequencies per motor, as ArduPilot's AP_ESC_Telem reports them to the
  * notch: every motor that ever reported keeps its place (0 Hz once stale, so

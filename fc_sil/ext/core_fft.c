@@ -7,8 +7,10 @@
  * bind_fft_log(ftn1, ftn2) binds two bytearrays the log owns; the batch logger
  * (core_log.c) calls fc_ext_log_fft after each batch, which appends a set of rows when
  * the IMU clock crossed the next 100 ms mark and the FFT runs. ArduCopter sends no FFT
- * telemetry message to ground stations, only text (the pre-arm "FFT calibrating noise":
- * fft_calibrating() here, fc_sil/prearm.py); nor do we. Conversion only.
+ * telemetry message to ground stations, only text: the pre-arm "FFT calibrating noise"
+ * (fft_calibrating() here, fc_sil/prearm.py), "FFT: calibrated ..." once the noise
+ * reference is learned (fft_calibration()) and FFT_OPTIONS bit 1's "Noise ... on motor"
+ * (fft_esc_noise()); fc_sil/fft_notice.py words and sends them. Conversion only.
  */
 #include "core_object.h"
 
@@ -143,7 +145,78 @@ static PyObject *Core_fft_calibrating(CoreObject *self, PyObject *Py_UNUSED(unus
     return PyBool_FromLong(self->core.fft.active && self->core.fft.needs_calibration != 0);
 }
 
+/* fft_calibration() -> (sample kHz, half bin Hz, output Hz), the figures of ArduCopter's
+ * "FFT: calibrated" text, or None while the FFT is off or still learning its noise. */
+static PyObject *Core_fft_calibration(CoreObject *self, PyObject *Py_UNUSED(unused))
+{
+    const fc_fft_t *f = &self->core.fft;
+    if (!f->active || f->needs_calibration != 0) {
+        Py_RETURN_NONE;
+    }
+    fc_fft_calibration_t k;
+    fc_fft_calibration(f, &k);
+    return Py_BuildValue("(ddd)", (double)k.sample_khz, (double)k.half_bin_hz,
+                         (double)k.output_hz);
+}
+
+_Static_assert(FC_FFT_ESC_MAX == FC_ESC_MAX, "the motor-noise check covers every ESC");
+
+/* Each ESC's motor frequency as AP_ESC_Telem::get_motor_frequencies_hz gives it: in motor
+ * order up to the last that ever reported, 0 Hz for none or stale. Returns how many. */
+static unsigned motor_hz(const fc_core_t *c, float hz[FC_ESC_MAX])
+{
+    unsigned n = 0;
+    for (unsigned i = 0; i < FC_ESC_MAX; i++) {
+        const fc_esc_report_t *r = &c->esc.esc[i];
+        const bool fresh = r->sim_ns >= 0 && c->last_imu_ns - r->sim_ns <= FC_ESC_RPM_TIMEOUT_NS;
+        hz[i] = fresh ? r->rpm * (1.0f / 60.0f) : 0.0f;
+        n = r->sim_ns >= 0 ? i + 1u : n;
+    }
+    return n;
+}
+
+/* fft_esc_noise(dt_s) -> [(motor 1.., dB, Hz), ...]: one FFT_OPTIONS bit 1 check
+ * (fc_fft_esc_noise_check; call every FC_FFT_ESC_CHECK_S), the motors to warn about now. */
+static PyObject *Core_fft_esc_noise(CoreObject *self, PyObject *arg)
+{
+    const double dt_s = PyFloat_AsDouble(arg);
+    if (dt_s == -1.0 && PyErr_Occurred()) {
+        return NULL;
+    }
+    fc_core_t *c = &self->core;
+    bool fft_notch = false;
+    for (int j = 0; j < FC_INS_NOTCHES; j++) {
+        const fc_notch_config_t *n = &c->ins.notch[j].cfg;
+        fft_notch = fft_notch || (n->enable && n->mode == FC_NOTCH_MODE_FFT);
+    }
+    float hz[FC_ESC_MAX];
+    const unsigned n = motor_hz(c, hz);
+    const unsigned warn = fc_fft_esc_noise_check(&c->fft, hz, n, c->in.armed != 0, fft_notch,
+                                                 (float)dt_s);
+    PyObject *out = PyList_New(0);
+    for (unsigned i = 0; out != NULL && i < n; i++) {
+        if (!(warn & (1u << i))) {
+            continue;
+        }
+        PyObject *row = Py_BuildValue("(Idd)", i + 1u, (double)c->fft.esc_noise.energy_db[i],
+                                      (double)hz[i]);
+        if (row == NULL || PyList_Append(out, row) < 0) {
+            Py_XDECREF(row);
+            Py_CLEAR(out);
+            break;
+        }
+        Py_DECREF(row);
+    }
+    return out;
+}
+
 PyMethodDef fc_ext_fft_methods[] = {
+    {"fft_calibration", (PyCFunction)Core_fft_calibration, METH_NOARGS,
+     "fft_calibration() -> (kHz, half bin Hz, output Hz) or None: the figures of "
+     "ArduCopter's 'FFT: calibrated' text once the noise reference is learned."},
+    {"fft_esc_noise", (PyCFunction)Core_fft_esc_noise, METH_O,
+     "fft_esc_noise(dt_s) -> [(motor, dB, Hz)]: one FFT_OPTIONS bit 1 motor-noise check "
+     "(every 0.2 s); the motors to warn about now."},
     {"bind_fft_log", (PyCFunction)Core_bind_fft_log, METH_VARARGS,
      "bind_fft_log(ftn1, ftn2): append FTN1/FTN2 rows (48 bytes each, ftn_log.py) at 10 Hz "
      "of IMU time to these bytearrays while the FFT runs; None, None: off."},

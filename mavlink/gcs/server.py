@@ -142,6 +142,7 @@ class GcsServer(MessageDispatch, ServerHooks, TelemetrySender):
         self._outbox: collections.deque = collections.deque()
         self._statustext_id = 0
         self._gcs_heartbeat_s: float | None = None
+        self.gcs_heartbeats = 0     # HEARTBEATs heard from SYSID_MYGCS (the FC times them on sim time)
         self._home_sent: dict[Link, int] = {}
         self._param_dirty_s: float | None = None
         self._stop = threading.Event()

@@ -53,6 +53,7 @@ class MessageDispatch:
     def _on_heartbeat(self, link, msg, now):
         if msg.get_srcSystem() == self._my_gcs():
             self._gcs_heartbeat_s = now
+            self.gcs_heartbeats += 1
 
     def _on_param(self, link, msg, now):
         self.param_proto.handle(link, msg)

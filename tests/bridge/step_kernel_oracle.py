@@ -22,6 +22,8 @@ Interface shared by both (Simulator(..., kernel_cls=Kernel) selects this one):
     k.configure_mag(rate_hz, field_ned, offset, noise_gauss)      # and the magnetometer
     k.set_baro_block(normals (rows, 1)); k.set_mag_block(normals (rows, 3))
     k.next_slow_ns                 # from this sim time, flags carry F_SLOW_DUE (GNSS, setpoints)
+    k.configure_battery(torque=..., cells=..., ...)   # the pack the step runs (battery.h);
+    k.write_battery(slot), k.battery_state(), ...     # battery_reference.py KernelPack
 The low byte of flags is the number of records written; the state array receives the
 values in the _step.ST_* slots. Without F_SLOW_DUE the last record carries STEP_END.
 """
@@ -29,6 +31,8 @@ values in the _step.ST_* slots. Without F_SLOW_DUE the last record carries STEP_
 from __future__ import annotations
 
 import math
+
+from battery_reference import KernelPack
 
 from silbridge.bridge import _step as K
 from silbridge.bridge.frames import ned_to_frd, quat_from_euler
@@ -185,6 +189,7 @@ class Kernel:
         self._seq = [0, 0, 0]
         self._baro = self._mag = None
         self._forces: list = []
+        self._pack = None
         self._block = None
         self._temps = None
         self.pos = 0
@@ -238,6 +243,32 @@ class Kernel:
     def set_mag_block(self, block) -> None:
         self._mag.noise, self._mag.pos = block.tolist(), 0
 
+    # --- the battery (step_battery.c) ----------------------------------------------------
+    def configure_battery(self, **cfg) -> None:
+        self._pack = KernelPack(**cfg)
+
+    def write_battery(self, slot: int) -> int:
+        sim_ns = self.step_index * self.dt_ns
+        if not self._pack.due(sim_ns):
+            return 0
+        self._pack.report(self.buf, slot, sim_ns, self.st[K.ST_OMEGA:K.ST_OMEGA + 4].tolist())
+        return 1
+
+    def battery_state(self) -> tuple:
+        return self._pack.state()
+
+    def battery_solve(self, esc_w: float) -> tuple:
+        return self._pack.solve(esc_w)
+
+    def battery_esc_power(self, omega) -> tuple:
+        return self._pack.esc_power(omega)
+
+    def set_battery_cell(self, cell: int, offset_v: float, r_scale: float) -> None:
+        self._pack.set_cell(cell, offset_v, r_scale)
+
+    def battery_lose_charge(self, fraction: float) -> None:
+        self._pack.pack.lose_charge(fraction)
+
     # --- the step: JSBSim (step_run.c), then the sensor stage (sensor_stage.c) -----------
     def step(self, pwm) -> int:
         if not self.scalar_imu:
@@ -279,6 +310,10 @@ class Kernel:
         m = self._mag
         if m is not None and sim_ns >= m.next_ns:
             flags |= self._write_mag(s, slot, sim_ns)
+            slot += 1
+        p = self._pack
+        if p is not None and p.due(sim_ns) and sim_ns < self.next_slow_ns:
+            p.report(self.buf, slot, sim_ns, omega_of(s))
             slot += 1
         if sim_ns >= self.next_slow_ns:
             flags |= K.F_SLOW_DUE

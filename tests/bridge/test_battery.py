@@ -1,5 +1,7 @@
-"""The physics-side battery (bridge/battery/): the pack model, its faults, its records and
-their MAVLink HIL form, and the scenario keys that moved to [battery]."""
+"""The physics-side battery (bridge/battery/, run by the step kernel: bridge/src/battery.c):
+the pack model's behaviour on its Python reference (battery_reference.py, beside this file),
+the C pack against that reference bit for bit, its faults through the kernel, its records
+and their MAVLink HIL form, and the scenario keys that moved to [battery]."""
 
 from __future__ import annotations
 
@@ -7,8 +9,8 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from silbridge.bridge.battery import BatteryFaults, Pack
-from silbridge.bridge.battery.cell import ocv_v, r_temp_factor
+from battery_reference import Pack, apply_fault, esc_power_w, ocv_v, r_temp_factor
+
 from silbridge.bridge.errors import ScenarioError
 from silbridge.bridge.faults.engine import ActiveFault
 from silbridge.bridge.scenario import load_scenario
@@ -65,17 +67,16 @@ def test_voltage_falls_with_the_charge_drawn():
 
 def test_a_weak_cell_lowers_the_pack_and_the_lowest_cell_and_sags_more():
     p = _pack()
-    f = BatteryFaults(p)
     p.update(HOVER_W, 0.1)
     v0, low0 = p.voltage_v, p.lowest_cell_v
-    f.on(_fault("weak_cell", cell_drop_v=0.3, r_scale=3.0), 0)
+    apply_fault(p, _fault("weak_cell", cell_drop_v=0.3, r_scale=3.0), True)
     p.update(HOVER_W, 0.1)
     assert p.voltage_v < v0 - 0.3
     assert p.lowest_cell_v < low0 - 0.3
     assert p.cell_v.index(p.lowest_cell_v) == 0
     others = p.cell_v[1]
     assert others - p.lowest_cell_v > 0.3 + 2 * p.current_a * p.r_cell_ohm * 0.9
-    f.off(_fault("weak_cell", cell_drop_v=0.3, r_scale=3.0), 0)
+    apply_fault(p, _fault("weak_cell", cell_drop_v=0.3, r_scale=3.0), False)
     p.update(HOVER_W, 0.1)
     assert p.lowest_cell_v == pytest.approx(others, abs=0.005)
 
@@ -84,7 +85,7 @@ def test_capacity_loss_drops_remaining_at_once_and_keeps_consumed():
     p = _pack(initial_soc=0.9)
     p.update(HOVER_W, 0.1)
     rem, used, v = p.remaining, p.consumed_mah, p.voltage_v
-    BatteryFaults(p).on(_fault("capacity_loss", fraction=0.5), 0)
+    apply_fault(p, _fault("capacity_loss", fraction=0.5), True)
     assert p.remaining == pytest.approx(rem * 0.5)
     assert p.consumed_mah == used
     p.update(HOVER_W, 0.1)
@@ -102,6 +103,95 @@ def test_cold_raises_the_resistance_and_the_pack_warms_under_load():
     for _ in range(600):
         warm.update(HOVER_W * 3, 0.1)
     assert warm.temp_c > t0 + 1.0
+
+
+def test_the_c_pack_solves_as_the_reference_and_switches_its_faults_through_the_kernel():
+    sc = load_scenario("S1", overrides={"battery.initial_soc": 0.6, "battery.temperature_c": 5.0})
+    sim = Simulator(sc)
+    ref = Pack(sc.battery, air_c=sim._ambient_c)
+    kernel = sim.kernel
+    for w in (0.0, 37.0, HOVER_W, HOVER_W * 3, 5000.0, 1e6):       # 1e6 W: a collapsed pack
+        assert kernel.battery_solve(w) == ref.solve(w)[:2], w
+    sim.faults.inject("battery", "weak_cell", 1, {"cell_drop_v": 0.3, "r_scale": 3.0}, True, 0)
+    apply_fault(ref, _fault("weak_cell", cell_drop_v=0.3, r_scale=3.0), True)
+    assert kernel.battery_solve(HOVER_W) == ref.solve(HOVER_W)[:2]
+    assert kernel.battery_solve(HOVER_W)[0] < sim.battery.voltage_v - 0.3
+    sim.faults.inject("battery", "capacity_loss", 1, {"fraction": 0.25}, True, 0)
+    apply_fault(ref, _fault("capacity_loss", fraction=0.25), True)
+    assert sim.battery.remaining == ref.remaining == pytest.approx(0.45)
+    sim.faults.inject("battery", "weak_cell", 1, {"cell_drop_v": 0.3, "r_scale": 3.0}, False, 0)
+    apply_fault(ref, _fault("weak_cell", cell_drop_v=0.3, r_scale=3.0), False)
+    assert kernel.battery_solve(HOVER_W) == ref.solve(HOVER_W)[:2]
+    for _ in range(50):                       # spinning: the motors load the pack
+        sim.step([sim.hover_pwm_us] * 4)
+    omega = (900.0, 950.0, -1.0, 1000.0)      # a negative speed counts as stopped
+    nodes = [sim.fdm.fdm.get_property_manager().get_node(f"fcs/m{i}-torque-lbsft")
+             for i in range(1, 5)]
+    now = [n.get_double_value() for n in nodes]
+    assert min(now) > 0.0
+    assert sim.battery.load.power_w(omega) == esc_power_w(omega, now, sim.battery.load.ke,
+                                                          sim.battery.load.r_ohm)
+
+
+def test_the_c_pack_matches_the_reference_to_the_last_bit_over_charge_heat_and_load():
+    """300 packs drawn over charge, temperature, load and fault state: the kernel's solve and
+    one report's update (write_battery) give the reference's doubles exactly."""
+    from battery_reference import KernelPack
+    sim = Simulator(load_scenario("S1"))
+    for _ in range(100):                      # at 0.1 s: a freshly configured pack is due
+        sim.step([sim.hover_pwm_us] * 4)
+    kernel, load = sim.kernel, sim.battery.load
+    rng = np.random.default_rng(25)
+    for _ in range(300):
+        soc, temp_c, air_c, w, drop = rng.uniform((0, -20, -10, 0, 0), (1, 60, 40, 3000, 0.5))
+        torque = [(lambda q=float(q): q) for q in rng.uniform(-0.01, 0.06, 4)]
+        cfg = dict(cells=int(rng.integers(1, 15)), capacity_mah=float(rng.uniform(500, 9000)),
+                   internal_mohm=float(rng.uniform(5, 80)), avionics_a=0.6,
+                   initial_soc=float(soc), temperature_c=float(temp_c), air_c=float(air_c),
+                   activation_kj_mol=35.0, heat_capacity_j_k=320.0, thermal_k_per_w=1.8,
+                   rate_hz=10.0, ke_v_s_rad=load.ke, winding_ohm=load.r_ohm)
+        kernel.configure_battery(torque=torque, **cfg)
+        ref = KernelPack(torque, **cfg)
+        kernel.set_battery_cell(0, float(drop), 1.0 + 3.0 * float(drop))
+        ref.set_cell(0, float(drop), 1.0 + 3.0 * float(drop))
+        assert kernel.battery_solve(float(w)) == ref.solve(float(w))
+        assert kernel.write_battery(0) == 1
+        ref.report(bytearray(64), 0, sim.sim_ns, sim.rotor_rad_s())
+        assert kernel.battery_state() == ref.state()
+
+
+def test_the_kernel_reports_the_pack_bit_for_bit_as_the_reference_with_faults():
+    """Both of the kernel's paths: the stage writes a report on a step without Python (GNSS
+    at 5 Hz leaves every other 100 ms step to C); write_battery on a GNSS epoch's step."""
+    from battery_reference import KernelPack
+    sc = load_scenario("S1", overrides={"gnss.rate_hz": 5.0, "battery.initial_soc": 0.5})
+    sim = Simulator(sc)
+    load = sim.battery.load
+    pm = sim.fdm.fdm.get_property_manager()
+    torque = [pm.get_node(f"fcs/m{i}-torque-lbsft").get_double_value for i in range(1, 5)]
+    b = sc.battery
+    ref = KernelPack(torque, b.cells, b.capacity_mah, b.internal_mohm, b.avionics_a,
+                     b.initial_soc, sim._ambient_c, sim._ambient_c, b.activation_kj_mol,
+                     b.heat_capacity_j_k, b.thermal_k_per_w, b.rate_hz, load.ke, load.r_ohm)
+    faults = {250: ("weak_cell", {"cell_drop_v": 0.2, "r_scale": 2.5}),
+              420: ("capacity_loss", {"fraction": 0.3})}
+    buf, got, want = bytearray(64), [], []
+    for k in range(1, 701):
+        if k in faults:
+            ftype, params = faults[k]
+            sim.faults.inject("battery", ftype, 1, params, True, sim.sim_ns)
+            apply_fault(ref.pack, _fault(ftype, **params), True)
+        recs = sim.step([sim.hover_pwm_us + 30.0 * (k % 3)] * 4)
+        got += [r.tobytes() for r in recs[recs["kind"] == Kind.BATTERY]]
+        if ref.due(sim.sim_ns):
+            ref.report(buf, 0, sim.sim_ns, sim.rotor_rad_s())
+            rec = np.frombuffer(buf, dtype=recs.dtype).copy()
+            rec["flags"] = recs[-1]["flags"] if recs[-1]["kind"] == Kind.BATTERY else 0
+            want.append(rec.tobytes())
+    assert len(got) == 7 and got == want
+    # the doubles behind the quantised records, to the last bit: voltage, current, charge
+    # drawn, remaining, temperature, lowest cell, reports, next report
+    assert sim.kernel.battery_state() == ref.state()
 
 
 def _fly(sc, steps):

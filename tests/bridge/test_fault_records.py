@@ -15,6 +15,7 @@ import numpy as np
 
 from silbridge.bridge.bridge_driver import prepare_segment, run_bridge
 from silbridge.bridge.bridge_loop import BridgeLoop
+from silbridge.bridge.fault_records import fault_summary
 from silbridge.fc_sil.autoflight import AutoFlight
 from silbridge.fc_sil.fault_inject import fault_record
 from silbridge.fc_sil.fc_loop import FcLoop
@@ -59,6 +60,7 @@ def test_fault_records_are_routed_and_malformed_ones_counted():
     )])
     with Segment.create(_name("py")) as seg, Segment.attach(_name("py")) as fc_seg:
         loop = BridgeLoop(sim, seg, trace=False)
+        assert fault_summary(sim.faults, loop.fault_records) == {}   # a fault-free run: no key
         assert fc_seg.actuators.push_batch(sent) == len(sent)
         assert loop.collect_pwm() == 2                 # the two PWM records
         assert loop.pwm_us == (1420, 1420, 1420, 1420)  # the newest PWM, not the last record
@@ -71,6 +73,11 @@ def test_fault_records_are_routed_and_malformed_ones_counted():
                                     .view(RECORD_DTYPE))
         assert loop.collect_pwm() == 0 and loop.pwm_us == (1420,) * 4
         assert sim.faults.active("gnss") == []
+        # the run summary's counts: one switch each way, every gnss record read (the
+        # unreadable unit and type under "?")
+        assert fault_summary(sim.faults, fr) == {
+            "?": {"on": 0, "off": 0, "fault_records": 2},
+            "gnss": {"on": 1, "off": 1, "fault_records": 5}}
 
 
 class _InjectAt(AutoFlight):
@@ -109,5 +116,5 @@ def test_fault_record_through_the_c_lockstep_batch():
     assert (f.type, f.instance, f.params["remaining"]) == ("thrust_loss", 3, 0.5)
     # switched on right after the FC sent it: at the step that collected it
     assert 0 <= f.t_on_ns - sup.sent_ns <= 2 * sim.dt_ns
-    assert res is not None
+    assert res.faults == {"motor": {"on": 1, "off": 0, "fault_records": 1}}
     assert FAULT_DTYPE.itemsize == 64

@@ -136,3 +136,22 @@ def test_the_ekf_failsafe_leaves_a_mode_without_position_alone():
     assert any(s == "EKF variance" for _, _, s in texts)
     assert not any(s.startswith("EKF Failsafe:") for _, _, s in texts)
     assert not res.crashed
+
+
+def test_glitch_hysteresis_starts_when_the_estimate_is_valid_at_its_first_update():
+    """A loaded host can hand the FC a valid estimate before its first failsafe check: the
+    hysteresis starts its clocks there instead of subtracting from "never" (it once raised
+    TypeError and took the FC down)."""
+    from types import SimpleNamespace
+
+    from silbridge.fc_sil.innov_ratios import InnovationRatios
+
+    r = InnovationRatios()
+    v = SimpleNamespace(sim_ns=5_000_000_000, est=SimpleNamespace(valid=True))
+    r._glitch_hysteresis(v)
+    assert not r.gps_glitching
+    r.pos = 10.0                                   # far outside the gate from now on
+    for k in range(1, 60):
+        v.sim_ns = 5_000_000_000 + k * 100_000_000
+        r._glitch_hysteresis(v)
+    assert r.gps_glitching                          # and the clock it started flags it

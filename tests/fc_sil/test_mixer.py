@@ -73,3 +73,18 @@ def test_spool_states():
     assert np.all(pwm == 1000) and flags[0] == 0
     _, pwm, _, _ = m.run(1100, 100, 100, 100, spool=B.Mixer.SPOOL_GROUND_IDLE)
     assert np.all(pwm == 1100)
+
+
+def test_saturated_roll_pitch_fit_around_the_demanded_collective_up_to_half_thrust():
+    # ArduCopter's rpy_scale: the altitude loop keeps its say while roll and pitch saturate
+    # (band 1150..1950; half thrust at 1150 + 0.648 x 800; below the middle, halfway to it)
+    lo, hi, half = 1150.0, 1950.0, 1150.0 + 0.648 * 800.0
+    for demand, collective in ((1620, 1620), (1900, half), (1250, 1400), (1550, 1550)):
+        motor, _, flags, applied = B.Mixer(slew=False).run(demand, 600, 500, 0)
+        assert flags[0] & SAT_ROLL and flags[0] & SAT_PITCH
+        assert applied[0, 0] == pytest.approx(collective, abs=0.05), demand
+        assert motor[0].mean() == pytest.approx(collective, abs=0.05)
+        assert motor.min() >= lo - 1e-3 and motor.max() <= hi + 1e-3
+        assert applied[0, 1] / applied[0, 2] == pytest.approx(600 / 500)   # ratio kept
+        edge = hi - motor.max() if collective >= 1550 else motor.min() - lo
+        assert edge == pytest.approx(0.0, abs=0.05)    # as much authority as fits

@@ -82,7 +82,48 @@ def test_estimator_learns_an_accelerometer_bias():
     assert abs(est.vel_ne_m_s[0]) < 0.05
 
 
+def test_a_gnss_jump_past_the_retry_time_resets_the_estimate_and_reports_the_jump():
+    # EKF3's getLastPosNorthEastReset: a count and the shift, for the position controllers
+    o = GeoOrigin(473977420, 85455940, 488.0)
+    est = PositionEstimator(pos_tc_s=1.5, vel_tc_s=0.2, delay_s=0.0)
+    q, f_body = (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, -G)
+    seen = []
+    for k in range(1, 1001):                 # 20 s standing still; fixes 30 m north from 5 s
+        t = k * 20_000_000
+        est.predict(t, 0.02, q, f_body)
+        if k % 5 == 0:
+            est.fuse_gnss(_fix(t, o, 30.0 if t >= 5_000_000_000 else 0.0, 0.0))
+        seen.append((t, est.xy_reset_count))
+    assert est.xy_reset_count == 1
+    t_reset = next(t for t, c in seen if c == 1) / 1e9
+    assert 15.0 <= t_reset <= 15.2           # 10 s of rejected positions (velocity passing)
+    dn, de = est.xy_reset_ne_m
+    assert dn == pytest.approx(30.0, abs=0.5) and de == pytest.approx(0.0, abs=0.1)
+    assert est.xy_reset_vel_ne_m_s == (0.0, 0.0)      # the velocity still fused: no reset
+    assert est.pos_ne_m[0] == pytest.approx(30.0, abs=0.1)
+
+
 # ---- controllers ---------------------------------------------------------------------------------
+
+def test_position_controller_follows_an_estimate_reset_without_a_jump_in_its_output():
+    # AC_PosControl::handle_ekf_xy_reset: the target keeps its offset from the estimate
+    def held(shift):
+        pc = PosController(PosGains())
+        pc.reset((0.0, 0.0), (0.0, 0.0))
+        pos, out = [0.4, -0.3], None
+        for _ in range(50):
+            out = pc.update(0.02, pos, (0.2, 0.1))
+        if shift:
+            pc.shift((30.0, -2.0))
+            pos = [pos[0] + 30.0, pos[1] - 2.0]
+        target = pc.pos_target
+        return target, pc.update(0.02, pos, (0.2, 0.1)), out
+
+    (tn, te), after, before = held(False)
+    (sn, se), after_shifted, _ = held(True)
+    assert (sn, se) == (tn + 30.0, te - 2.0)
+    assert after_shifted == pytest.approx(after, abs=1e-12)
+    assert after == pytest.approx(before, abs=0.01)
 
 def test_sqrt_controller_is_linear_near_zero_and_braking_curve_far():
     assert sqrt_controller(0.5, 1.0, 2.5) == pytest.approx(0.5)
@@ -113,6 +154,41 @@ def test_position_controller_velocity_command_is_shaped_by_accel_and_jerk():
     assert pc.vel_desired[0] == pytest.approx(10.0, abs=0.01)
     # the position target moved along with the shaped velocity
     assert pc.pos_target[0] > 50.0
+
+
+def test_a_reset_moves_guided_and_land_hold_points_and_the_controller_target_by_its_jump():
+    # the vehicle follows each reset once (vehicle_nav.follow_xy_reset, every outer step)
+    from silbridge.fc_sil import modes
+    from silbridge.fc_sil.vehicle import Vehicle
+    v = Vehicle(FlightCore())
+    o = GeoOrigin(473977420, 85455940, 488.0)
+    q, f_body = (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, -G)
+    held = {}
+    for k in range(1, 1001):                 # fixes jump 30 m north at 5 s: a reset at 15 s
+        t = k * 20_000_000
+        v.est.predict(t, 0.02, q, f_body)
+        if k % 5 == 0:
+            v.est.fuse_gnss(_fix(t, o, 30.0 if t >= 5_000_000_000 else 0.0, 2.0))
+        if k == 200:                         # 4 s: hold here (a take-off's hold point)
+            g = modes.Guided()
+            g.enter(v)
+            g.start_takeoff(v, 10.0)
+            v.mode = g
+            v.pos_ctl.reset(v.est.pos_ne_m, (0.0, 0.0))
+            held = {"hold": g.hold_ne, "target": v.pos_ctl.pos_target, "shape": g.pos_d}
+        v.follow_xy_reset()
+    dn, de = v.est.xy_reset_ne_m
+    assert v.est.xy_reset_count == 1 and dn == pytest.approx(30.0, abs=0.5)
+    for name, now in (("hold", v.mode.hold_ne), ("target", v.pos_ctl.pos_target),
+                      ("shape", v.mode.pos_d)):
+        assert now == pytest.approx((held[name][0] + dn, held[name][1] + de), abs=1e-9), name
+    land = modes.Land()
+    land.hold_ne = (1.0, 2.0)
+    v.mode = land
+    v.est.xy_reset_count += 1               # a second reset with the same jump
+    v.follow_xy_reset()
+    v.follow_xy_reset()                      # followed once only
+    assert land.hold_ne == pytest.approx((1.0 + dn, 2.0 + de), abs=1e-9)
 
 
 # ---- battery and pilot ---------------------------------------------------------------------------

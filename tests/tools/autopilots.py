@@ -32,6 +32,9 @@ from silbridge.tools.autopilots.ardupilot.sitl import (  # noqa: E402
 
 KINDS = ("silbridge", "arducopter")
 HOME = "-35.363261,149.165230,584,353"
+# The real ArduCopter runs its own physics here at this --speedup (it keeps up to ~45x on
+# this machine); tests read its own clock (time_boot_ms), so they hold at any speedup.
+ARDUCOPTER_SPEEDUP = 10.0
 ARDUCOPTER_DEFAULTS = {
     "FRAME_CLASS": 1, "FRAME_TYPE": 1,
     **{f"INS_ACC{k}OFFS_{a}": 0.001 for k in ("", "2") for a in "XYZ"},
@@ -64,7 +67,7 @@ class Autopilot:
 class Silbridge(Autopilot):
     kind = "silbridge"
 
-    def __init__(self, speed: float = 3.0, extra=(), cwd=None, attempts: int = 3):
+    def __init__(self, speed: float = 6.0, extra=(), cwd=None, attempts: int = 3):
         port = free_udp_port()
         self.v = SitlVehicle([f"udpout:127.0.0.1:{port}"], speed=speed, processes=1,
                              extra=extra, cwd=cwd, attempts=attempts)
@@ -83,7 +86,7 @@ class Silbridge(Autopilot):
 class ArduCopter(Autopilot):
     kind = "arducopter"
 
-    def __init__(self, workdir: str, speedup: float = 5.0, params: dict | None = None):
+    def __init__(self, workdir: str, speedup: float = ARDUCOPTER_SPEEDUP, params: dict | None = None):
         binary = arducopter_binary()
         if binary is None:
             raise RuntimeError(f"{ENV_BINARY} is not set")
@@ -131,11 +134,13 @@ class ArduCopter(Autopilot):
         return self.proc.poll() is None
 
 
-def start(kind: str, tmp_path, *, silbridge_extra=(), arducopter_params=None) -> Autopilot:
+def start(kind: str, tmp_path, *, silbridge_extra=(), arducopter_params=None,
+          arducopter_speedup: float = ARDUCOPTER_SPEEDUP) -> Autopilot:
     skip_without_arducopter(kind)
     if kind == "silbridge":
         return Silbridge(extra=silbridge_extra, cwd=str(tmp_path))
-    return ArduCopter(str(tmp_path / "arducopter"), params=arducopter_params)
+    return ArduCopter(str(tmp_path / "arducopter"), params=arducopter_params,
+                      speedup=arducopter_speedup)
 
 
 def mavproxy_path() -> str | None:

@@ -29,7 +29,7 @@ DEFAULT_DEPARTURES = {
     "MOT_SLEW_UP_TIME": "paper's slew limit on", "MOT_SLEW_DN_TIME": "paper's slew limit on",
     "PSC_VELXY_D": "silbridge position loop",
     # the simulated vehicle and its battery (fc_params.def texts)
-    "FS_GCS_ENABLE": "GCS failsafe on in SITL", "BATT_LOW_VOLT": "modelled 4S pack",
+    "BATT_LOW_VOLT": "modelled 4S pack",
     "BATT_FS_LOW_ACT": "RTL on low battery", "BATT_FS_CRT_ACT": "LAND on critical battery",
     # ArduCopter SITL's copter.parm, so QGroundControl's setup pages show as done
     "FRAME_CLASS": "copter.parm (1: quad)",

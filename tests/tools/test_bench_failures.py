@@ -1,13 +1,14 @@
 """The failure benchmark (`silbridge bench --suite failures`, tools/benchmark/failures/).
 
-- F1..F10 load, each fault is in the catalog, and each plan's scenario (physics.toml plus
-  its [[failure]] entries) passes the scenario schema.
+- F1..F12 load, each fault is in the catalog, and each plan's scenario (physics.toml plus
+  its [plan.physics] keys and [[failure]] entries) passes the scenario schema.
 - ArduCopter's translation: a 30 m GNSS glitch north becomes the SIM_GPS_GLITCH_X degrees
   that put the reported position 30 m north in the ground-truth frame; every catalog fault
   has a route to every autopilot.
 - The scores on synthetic timelines and trajectories whose answers are known: the first
   alert or failsafe mode change is the detection (an INFO text is not), a hold at the end
-  of a mission is not an action, a fall is a crash and a slow touchdown a landing.
+  of a mission is not an action, a fall is a crash and a slow touchdown a landing, a crash
+  check's disarm is on the ground.
 - Real flights: our FC (always) and ArduCopter 4.6 (when SILBRIDGE_ARDUCOPTER names it)
   fly F2 (GNSS off in position hold) and F8 (battery capacity loss in AUTO); ArduCopter's
   EKF failsafe lands (LAND) and its battery failsafe returns (RTL) with the BATT_*
@@ -28,8 +29,8 @@ from silbridge.shm import fault_catalog as cat
 from silbridge.tools.benchmark.failures import translate
 from silbridge.tools.benchmark.failures.campaign import run_one
 from silbridge.tools.benchmark.failures.plans import ALT_M, PLANS, write_scenario
-from silbridge.tools.benchmark.failures.scoring import (Truth, detection, first_action,
-                                                        outcome)
+from silbridge.tools.benchmark.failures.scoring import (Truth, detection, disarm,
+                                                        disarm_time, first_action, outcome)
 from silbridge.tools.benchmark.failures.watch import Timeline
 from silbridge.tools.benchmark.nav.geo import latlon_e7_to_ne
 
@@ -38,15 +39,18 @@ GUIDED, LAND, AUTO = 4, 9, 3
 
 
 def test_every_plan_is_a_valid_scenario(tmp_path):
-    assert list(PLANS) == [f"F{i}" for i in range(1, 11)]
+    assert list(PLANS) == [f"F{i}" for i in range(1, 13)]
     units = set()
     for plan in PLANS.values():
         sc = load_scenario(write_scenario(plan, str(tmp_path)), seed=3)
         # the client's own faults (GCS loss) are not the engine's
         assert [f.unit for f in sc.failures] == [f["unit"] for f in plan.engine_failures()]
+        # F12's crash does not end the run (the crash check and the disarm come after it)
+        assert sc.physics.end_on_crash == (plan.name != "F12")
         units |= set(plan.units)
-    # one plan per fault class; of the two radio links F10 flies the GCS loss
-    assert units == {u.name for u in cat.UNITS} - {"rc"}
+    # every fault class is flown
+    assert units == {u.name for u in cat.UNITS}
+    assert translate.route("ours", "rc", "lost").how == translate.FC_SIDE
 
 
 def test_gnss_glitch_becomes_arducopters_degrees():
@@ -66,7 +70,7 @@ def test_every_catalog_fault_has_a_route_to_every_autopilot():
             for fc in ("ours", "ardupilot", "px4"):
                 r = translate.route(fc, u.name, t.name)
                 assert r.how in (translate.BRIDGE, translate.CLIENT, translate.SIM_PARAM,
-                                 translate.NONE)
+                                 translate.FC_SIDE, translate.NONE)
                 if r.how == translate.SIM_PARAM:
                     assert r.on is not None and r.text
     assert translate.route("ours", "gnss", "glitch").how == translate.BRIDGE
@@ -92,6 +96,10 @@ def test_detection_is_the_first_alert_or_failsafe_mode_change():
     quiet = Timeline(modes=[(10.0, GUIDED, True)], texts=[(52.0, 6, "info only")])
     d, by = detection("ardupilot", quiet, 50.0, 80.0, None)
     assert math.isnan(d) and by == ""
+    # our FC announcing the injection itself (a scenario's rc entry) is not a detection
+    echo = Timeline(modes=[(10.0, AUTO, True)], texts=[(50.0, 4, "Failure injected: rc lost"),
+                                                      (51.0, 4, "Radio Failsafe")])
+    assert detection("ours", echo, 50.0, 80.0, None) == (1.0, "Radio Failsafe")
 
 
 def test_a_hold_where_the_mission_ends_is_not_an_action():
@@ -118,6 +126,20 @@ def test_outcome_tells_a_fall_from_a_landing():
     assert outcome(_truth(t, np.full_like(t, ALT_M)), 0.0) == "still flying"
     tipped = _truth(t, landing, tilt=np.where(t > 30, 90.0, 0.0))
     assert outcome(tipped, 0.0) == "crashed"
+
+
+def test_a_crash_checks_disarm_is_on_the_ground():
+    t = np.linspace(0, 40, 4001)
+    fall = np.maximum(ALT_M - 0.5 * 9.81 * (t - 10).clip(0) ** 2, 0.0)   # ground at ~11.4 s
+    tr = _truth(t, fall, tilt=np.where(t > 12, 90.0, 0.0))
+    crash_check = Timeline(modes=[(5.0, GUIDED, True), (14.0, GUIDED, False)])
+    assert disarm(crash_check, 10.0, tr) == "on the ground"
+    assert disarm_time(crash_check, 10.0) == 14.0
+    assert disarm(Timeline(modes=[(5.0, GUIDED, True), (10.5, GUIDED, False)]), 10.0, tr) \
+        == "in the air"
+    assert disarm(Timeline(modes=[(5.0, GUIDED, True)]), 10.0, tr) == "none"
+    # the in-air disarm is an action; the one on the ground after the crash is not
+    assert first_action("ardupilot", crash_check, 10.0, 40.0, tr, "hold") is None
 
 
 # ---- real flights --------------------------------------------------------------------------

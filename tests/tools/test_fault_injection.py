@@ -148,8 +148,10 @@ def _fly_guided(c, alt_m: float = 5.0) -> None:
 def test_injected_gcs_loss_is_silence_both_ways_fs_gcs_fires_and_it_ends(shm_vehicle):
     v, c = shm_vehicle
     _param_set(c, "SYS_FAILURE_EN", 1)
-    _param_set(c, "FS_GCS_TIMEOUT", 2.0, mav.MAV_PARAM_TYPE_REAL32)
-    # FS_GCS_TIMEOUT is wall time (the link's own), SB_FI_GCS_S sim time: 40 s at --speed 8
+    _param_set(c, "FS_GCS_ENABLE", 1, mav.MAV_PARAM_TYPE_INT8)
+    # both sim time: at --speed 8 our heartbeats (every 0.5 s of wall time while waiting)
+    # are 4 s of sim time apart, well inside 20 s; the injected loss lasts 40 s
+    _param_set(c, "FS_GCS_TIMEOUT", 20.0, mav.MAV_PARAM_TYPE_REAL32)
     _param_set(c, "SB_FI_GCS_S", 40.0, mav.MAV_PARAM_TYPE_REAL32)
     _fly_guided(c)
     # the command's ACK and the STATUSTEXT saying so still go out, then nothing

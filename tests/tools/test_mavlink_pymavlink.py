@@ -130,7 +130,11 @@ def test_gcs_heartbeat_loss_triggers_rtl(sitl):
     c = gcs_for(port)
     try:
         _ready(c, v)
-        c.send(mav.MAVLink_param_set_message(1, 1, b"FS_GCS_TIMEOUT", 2.0, 9))
+        # off by default (ArduCopter's 0); timed on sim time: at --speed 4 our heartbeats
+        # (every 0.5 s of wall time while waiting) are 2 s of sim time apart
+        c.send(mav.MAVLink_param_set_message(1, 1, b"FS_GCS_ENABLE", 1.0, 2))
+        assert wait_for(c, "PARAM_VALUE", lambda m: m.param_id == "FS_GCS_ENABLE") is not None
+        c.send(mav.MAVLink_param_set_message(1, 1, b"FS_GCS_TIMEOUT", 5.0, 9))
         assert wait_for(c, "PARAM_VALUE", lambda m: m.param_id == "FS_GCS_TIMEOUT") is not None
         _takeoff(c, 6.0)
         c.drain()

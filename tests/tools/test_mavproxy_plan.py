@@ -57,7 +57,7 @@ def _files(tmp_path, home):
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_mavproxy_fence_rally_wp_status_and_second_session(kind, tmp_path):
-    ap = start(kind, tmp_path)
+    ap = start(kind, tmp_path, arducopter_speedup=5.0)   # MAVProxy's own pace is wall time
     files = _files(tmp_path, HOMES[kind])
     mp = None
     try:

@@ -29,7 +29,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 from waits import until  # noqa: E402
 
-from autopilots import KINDS, start  # noqa: E402
+from autopilots import ARDUCOPTER_SPEEDUP, KINDS, start  # noqa: E402
 
 mavsdk = pytest.importorskip("mavsdk")
 if not hasattr(mavsdk, "Mavsdk"):
@@ -43,7 +43,6 @@ mavsdk.log_subscribe(lambda level, msg, file, line: True)    # keep MAVSDK's log
 
 DENIED_BY_ARDUCOPTER = {"set_rate_actuator_control_target", "set_rate_actuator_output_status",
                         "set_rate_altitude", "set_rate_ground_truth", "set_rate_odometry"}
-ARDUCOPTER_SPEEDUP = 5.0
 
 
 @pytest.mark.parametrize("kind", KINDS)

@@ -1,5 +1,6 @@
-"""Our notch against ArduCopter's (tools/benchmark/notch_compare.py, tools/docs/notch_page.py):
-the REF each side gets, runs flown in parts merged by seed, and the page's verdicts, from
+"""Our notch against ArduCopter's and PX4's (tools/benchmark/notch_compare.py,
+tools/docs/notch_page.py): the parameters each side gets, runs flown in parts merged by seed,
+each foreign side paired with ours set up the same way, and the page's verdicts, from
 constructed runs whose verdicts are known (the flights themselves: docs/notch-vs-arducopter.md)."""
 
 import math
@@ -33,8 +34,7 @@ def test_read_parm_skips_comments(tmp_path):
 
 def _result(side: str, seed: int, scenario: str = "V2", **metrics) -> RunResult:
     spec = RunSpec(scenario=scenario, run_index=seed - 1, seed=seed, duration_s=40.0,
-                   log_path="/nonexistent.mcap", variant=side,
-                   fc="ours" if side == "ours" else "ardupilot",
+                   log_path="/nonexistent.mcap", variant=side, fc=nc.FC_OF_SIDE[side],
                    params=tuple(NOTCH.items()))
     return RunResult(spec=spec, metrics=metrics)
 
@@ -87,3 +87,47 @@ def test_a_page_without_runs_says_how_to_fly_them(tmp_path, capsys):
     assert "fly the runs first (--run)" in capsys.readouterr().err
     assert notch_page.main(["--run", "--seeds", "5-2", "--work", str(tmp_path),
                             "--arducopter", "/bin/true", "--out", str(tmp_path / "p.md")]) == 2
+
+
+def test_the_fft_sides_follow_their_fft_with_the_tuned_width():
+    tuned = {**NOTCH, "INS_GYRO_FILTER": 20, "INS_HNTCH_HMNCS": 3}
+    sides = nc.side_params(tuned, expo=0.65)
+    ours = sides["ours_fft"]
+    assert ours["INS_HNTCH_MODE"] == 4 and ours["FFT_ENABLE"] == 1 and ours["INS_HNTCH_REF"] == 1
+    assert ours["INS_HNTCH_FREQ"] == ours["FFT_MINHZ"] == nc.FFT_MINHZ_HZ   # the notch's floor
+    assert ours["INS_HNTCH_BW"] == 40.5 and ours["INS_HNTCH_HMNCS"] == 3
+    px4 = sides["px4_fft"]
+    assert px4["IMU_GYRO_DNF_EN"] == 2 and px4["IMU_GYRO_FFT_EN"] == 1   # bit 1: the FFT's
+    assert px4["IMU_GYRO_DNF_BW"] == 30.0                 # 40.5 Hz is past PX4's range
+    assert px4["IMU_GYRO_FFT_MAX"] < 125                  # below its 250 Hz gyro's Nyquist
+    assert px4["IMU_GYRO_CUTOFF"] == 20.0 and px4["IMU_GYRO_DNF_MIN"] == nc.FFT_MINHZ_HZ
+    assert sides["px4_off"] == {**px4, "IMU_GYRO_DNF_EN": 0}   # the same PX4, no notch
+
+
+def test_px4_is_paired_with_ours_on_our_fft_and_only_where_both_flew(tmp_path):
+    out = []
+    for s in range(1, 6):
+        out.append(_result("ours_fft", s, pwm_pp_us=5.0 + s, gyro_noise_dps=0.03,
+                           motor_noise_us=0.4, att_rms_deg=0.4, att_p95_deg=0.6,
+                           sat_pct=0.0, gyro_in_noise_dps=20.0))
+        out.append(_result("px4_fft", s, pwm_pp_us=9.0 + s, gyro_noise_dps=float("nan"),
+                           motor_noise_us=0.2, att_rms_deg=0.4, att_p95_deg=0.6,
+                           sat_pct=0.0, gyro_in_noise_dps=21.0))
+    out += [_result("px4_off", s, pwm_pp_us=11.0 + s, motor_noise_us=0.5) for s in range(1, 6)]
+    nc.merge_runs(tmp_path, out)
+    _fly(tmp_path, range(1, 6))                   # ours and ArduCopter too, same seeds
+    rows = nc.load_runs(tmp_path)
+    judged = nc.compare(rows)
+    assert set(judged["V2"]) == {"ardupilot", "ardupilot_ref", "px4_fft", "px4_off"}
+    assert judged["V2"]["px4_off"]["pwm_pp_us"]["median_diff"] == -2.0   # PX4 notch - none
+    pp = judged["V2"]["px4_fft"]["pwm_pp_us"]
+    assert pp["n"] == 5 and pp["median_diff"] == -4.0        # ours_fft - px4, not ours - px4
+    page = notch_page.render(rows, "cmd", "now")
+    assert "# Our harmonic notch against ArduCopter's and PX4's" in page
+    assert "**Ours, notch on our FFT against PX4, notch on its FFT, paired by seed**" in page
+    assert "- V2, hover PWM p-p against PX4, notch on its FFT: met (at or below)." in page
+    assert "not measurable: PX4's filtered gyro does not reach silbridge " \
+           "(ours: median 0.030 deg/s)" in page
+    assert "folds back to ~88 Hz" in page
+    assert "**PX4, notch on its FFT against PX4, no notch, paired by seed**" in page
+    assert "against PX4, no notch:" not in page      # not a target of ours

@@ -1,4 +1,4 @@
-"""`silbridge soak --minutes 2`: the real vehicle (`silbridge sitl`, two processes) with the
+"""`silbridge soak --minutes 0.5` (the hour-long soak is a benchmark; this checks its machinery): the real vehicle (`silbridge sitl`, two processes) with the
 pymavlink ground station on a free port; the JSON must hold the samples and their fields,
 the per-interval late steps and rates from the log, and every kind of GCS action."""
 
@@ -12,11 +12,11 @@ import sys
 from silbridge.tools.soak.client import ACTIONS, GAIN_PARAM, GAIN_VALUES
 
 
-def test_two_minute_soak_reports_samples_and_verdict(tmp_path):
+def test_half_minute_soak_reports_samples_and_verdict(tmp_path):
     out = tmp_path / "soak"
-    # a two-minute run samples every 15 s (an eighth of it), one action every 3 s
-    p = subprocess.run([sys.executable, "-m", "silbridge", "soak", "--minutes", "2",
-                        "--action-every", "3", "--out", str(out),
+    # a 30 s run samples every 3.75 s (an eighth of it), one action a second
+    p = subprocess.run([sys.executable, "-m", "silbridge", "soak", "--minutes", "0.5",
+                        "--action-every", "1", "--out", str(out),
                         "--json"], capture_output=True, text=True, timeout=600)
     assert p.stdout.strip(), p.stderr[-3000:]
     r = json.loads(p.stdout.strip().splitlines()[-1])
@@ -25,8 +25,8 @@ def test_two_minute_soak_reports_samples_and_verdict(tmp_path):
     assert r == json.loads((out / "soak.json").read_text())
 
     samples = r["samples"]
-    assert len(samples) == 8                     # every 15 s for 120 s, the last on the end
-    assert samples[-1]["t_s"] >= 120.0
+    assert len(samples) == 8                     # every 3.75 s for 30 s, the last on the end
+    assert samples[-1]["t_s"] >= 30.0
     for s in samples:
         assert set(s["procs"]) == {"bridge", "fc"}, s["procs"]
         for proc in s["procs"].values():
@@ -38,7 +38,7 @@ def test_two_minute_soak_reports_samples_and_verdict(tmp_path):
     assert samples[-1]["streams_hz"]["ATTITUDE"] > 0
     assert samples[-1]["streams_hz"]["HEARTBEAT"] > 0
 
-    # late steps and rates per 15 s, read back from the closed log
+    # late steps and rates per 3.75 s, read back from the closed log
     assert len(r["minutes"]) >= 5
     for m in r["minutes"]:
         assert m["imu_hz"] > 100 and m["pwm_hz"] > 40 and m["late_steps_per_min"] >= 0

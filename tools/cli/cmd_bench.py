@@ -74,8 +74,9 @@ def add_arguments(p) -> None:
                    help="paper: Table 1 (S1..S4, attitude); nav: the navigation benchmark "
                         "N1..N4 (guided goto, offboard velocity with yaw, AUTO mission with "
                         "splines, the mission in wind), docs/howto/nav-bench.md; failures: "
-                        "F1..F10, one fault class each (GNSS, baro, compass, gyro, accel, "
-                        "motor, battery, SIL link, GCS loss), docs/howto/failure-bench.md "
+                        "F1..F12, one fault class each (GNSS, baro, compass, gyro, accel, "
+                        "motor, battery, SIL link, GCS loss, RC loss, a motor failing), "
+                        "docs/howto/failure-bench.md "
                         "(default %(default)s)")
     add_campaign_arguments(p)
     p.add_argument("--fc", default="ours", metavar="ours|ardupilot|px4|ours,ardupilot,px4",
@@ -248,9 +249,10 @@ def _run_nav(args, fcs: list[str]) -> int:
     """--suite nav (tools/benchmark/nav/command.py) and --suite failures
     (tools/benchmark/failures/command.py): --speed is every FC's real-time factor there;
     the binaries are checked before any run, as for the paper suite."""
-    from silbridge.tools.benchmark.nav.command import run_nav
     if args.suite == "failures":
         from silbridge.tools.benchmark.failures.command import run_failures as run_nav
+    else:
+        from silbridge.tools.benchmark.nav.command import run_nav
 
     speed_given = args.speed != RunSpec.sitl_speedup
     saved, args.speed = args.speed, RunSpec.sitl_speedup   # not an ArduCopter-only flag here

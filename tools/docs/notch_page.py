@@ -1,14 +1,17 @@
-"""docs/notch-vs-arducopter.md: our harmonic notch against ArduCopter's, written by this command.
+"""docs/notch-vs-arducopter.md: our harmonic notch against ArduCopter's and PX4's, written by
+this command.
 
     python -m silbridge.tools.docs.notch_page --run --seeds 1-5 [--scenarios V2,V4]
     python -m silbridge.tools.docs.notch_page --run --seeds 6-10      # more seeds, merged
+    python -m silbridge.tools.docs.notch_page --run --seeds 1-5 --sides ours_fft,px4_fft
     python -m silbridge.tools.docs.notch_page                         # the page from the runs
 
 `--run` tunes each scenario's notch with `silbridge tune notch` (once: its notch.parm is kept
-in --work), flies ours and ArduCopter on the seeds asked for (tools/benchmark/notch_compare.py),
-merges their figures into --work/runs.json, then writes the page from every run there. Flying
-in parts keeps each part short enough to hold the machine's lock for; the page is always
-judged from all the runs flown.
+in --work), flies the sides asked for on the seeds asked for (tools/benchmark/notch_compare.py:
+ours and ArduCopter with the tuned throttle notch, ours and PX4 with a notch following their
+in-flight FFT), merges their figures into --work/runs.json, then writes the page from every run
+there. Flying in parts keeps each part short enough to hold the machine's lock for; the page
+is always judged from all the runs flown.
 """
 
 from __future__ import annotations
@@ -29,7 +32,11 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_OUT = REPO_ROOT / "docs" / "notch-vs-arducopter.md"
 PROG = "python -m silbridge.tools.docs.notch_page"
 SIDE_LABELS = {"ours": "ours", "ardupilot": "ArduCopter",
-               "ardupilot_ref": "ArduCopter, REF in its throttle"}
+               "ardupilot_ref": "ArduCopter, REF in its throttle",
+               "ours_fft": "ours, notch on our FFT", "px4_fft": "PX4, notch on its FFT",
+               "px4_off": "PX4, no notch"}
+# Whose filtered gyro never reaches silbridge (the sides a gyro-noise target cannot judge).
+FOREIGN = {"ardupilot": "ArduCopter", "ardupilot_ref": "ArduCopter", "px4_fft": "PX4"}
 # The issue's targets: at or below ArduCopter with its notch, in these metrics.
 TARGETS = ("gyro_noise_dps", "pwm_pp_us")
 
@@ -43,6 +50,14 @@ def _seeds(text: str) -> range:
     if not 1 <= first <= last:
         raise nc.NotchCompareError(f"--seeds {text}: give 1 <= A <= B")
     return range(first, last + 1)
+
+
+def _sides(text: str) -> tuple[str, ...]:
+    sides = tuple(s.strip() for s in text.split(",") if s.strip())
+    unknown = [s for s in sides if s not in nc.SIDES]
+    if unknown or not sides:
+        raise nc.NotchCompareError(f"--sides {text!r}: choose from {', '.join(nc.SIDES)}")
+    return sides
 
 
 def tuned_notch(scenario: str, work: Path) -> dict:
@@ -63,13 +78,59 @@ def _thrust_expo(scenario: str) -> float:
     return make_sim().fdm.model_constant("quadx/thrust-expo")
 
 
-def fly(scenarios: list[str], seeds: range, work: Path, arducopter: str, jobs: int) -> None:
+def fly(scenarios: list[str], seeds: range, work: Path, *, sides, arducopter: str | None,
+        px4: str | None, jobs: int) -> None:
     from silbridge.tools.benchmark.campaign import run_campaign
     specs = []
     for sc in scenarios:
         params = nc.side_params(tuned_notch(sc, work), _thrust_expo(sc))
-        specs += nc.specs_for(sc, params, seeds, work, arducopter)
+        specs += nc.specs_for(sc, params, seeds, work, sides=sides, arducopter=arducopter,
+                              px4=px4)
     nc.merge_runs(work, run_campaign(specs, jobs=jobs, label="notch"))
+
+
+def _ours_of(side: str) -> str:
+    return next(o for o, t in nc.PAIRS if t == side)
+
+
+def _against_ours(judged_sc: dict) -> list[str]:
+    """The other sides judged against one of ours (not PX4 against itself)."""
+    return [side for side in judged_sc if nc.FC_OF_SIDE[_ours_of(side)] == "ours"]
+
+
+# What PX4's gyro_fft reported, read from PX4's own log (SDLOG_MODE 2, topic
+# sensor_gyro_fft, the last 15 s of a 40 s flight) of seed 1 with the px4_fft parameters,
+# against the rotor speed in our log; measured 2026-11-28 with PX4 v1.15.4 SITL.
+PX4_FFT_SEEN = (
+    "What PX4's FFT finds (its own log of seed 1, topic sensor_gyro_fft over the last 15 s; "
+    "measured 2026-11-28): 250 Hz sampling, 0.49 Hz bins. In V2 its strongest peak is "
+    "81.0 Hz on roll and pitch in every frame, the rotor's 81.0 Hz: the fold is too weak "
+    "to matter. In V4 its strongest peak is 88.0 Hz on roll and pitch, the folded second "
+    "harmonic, and the 81 Hz fundamental shows as a second peak in only 7 % (roll) and 30 % "
+    "(pitch) of its frames: PX4's notch sits mostly on the fold, the line its 250 Hz gyro "
+    "really carries, and on the fundamental now and then.")
+
+
+def _px4_intro(rows: list[dict]) -> list[str]:
+    """What the PX4 rows are, when there are any."""
+    seeds = sorted({r["seed"] for r in rows if r["side"] == "px4_fft"})
+    if not seeds:
+        return []
+    return [
+        f"PX4 v1.15 flies seeds {', '.join(map(str, seeds))} over MAVLink HIL on the same "
+        "physics with its FFT-driven dynamic notch (gyro_fft, IMU_GYRO_FFT_EN 1, "
+        "IMU_GYRO_DNF_EN bit 1), against ours with the notch following our in-flight FFT "
+        "(FFT_ENABLE 1, INS_HNTCH_MODE 4, INS_HNTCH_REF 1), both searching from "
+        f"{nc.FFT_MINHZ_HZ} Hz, with the tuned notch's bandwidth (PX4's IMU_GYRO_DNF_BW "
+        f"stops at {nc.PX4_DNF_BW_MAX_HZ:g} Hz) and gyro low-pass. PX4's gyro is the "
+        "HIL_SENSOR stream: 250 Hz, one sample per 4 ms lockstep step, the mean of our four "
+        "1 kHz samples. Its FFT therefore sees only up to 125 Hz: the hover rotor "
+        "(~81 Hz) is inside, but the second harmonic (~162 Hz) folds back to ~88 Hz, "
+        "beside the fundamental, attenuated about 7 dB by the four-sample mean. PX4 on a "
+        "real board samples its gyro at 1-8 kHz and would not see the fold." + (
+            " The same PX4 without the notch (IMU_GYRO_DNF_EN 0, `PX4, no notch`) shows what "
+            "its notch buys it." if any(r["side"] == "px4_off" for r in rows) else ""),
+        PX4_FFT_SEEN]
 
 
 def _params_line(rows: list[dict], scenario: str, side: str) -> str:
@@ -78,34 +139,34 @@ def _params_line(rows: list[dict], scenario: str, side: str) -> str:
 
 
 def _table(rows: list[dict], scenario: str, side: str, judged: dict) -> list[str]:
-    them = SIDE_LABELS[side]
-    lines = ["| " + " | ".join(["metric"] + header("ours", them)) + " |",
+    them, ours = SIDE_LABELS[side], _ours_of(side)
+    lines = ["| " + " | ".join(["metric"] + header(SIDE_LABELS[ours], them)) + " |",
              "|---|---|---|---|---|---|"]
     for key, label, unit, fmt in nc.METRICS:
         p = Paired.from_dict(judged[key])
-        row = cells(p, fmt, unit) if p.n else [_ours_only(rows, scenario, key, fmt),
+        row = cells(p, fmt, unit) if p.n else [_ours_only(rows, ours, scenario, key, fmt),
                                                "n/a", "n/a", "0", "not compared"]
         lines.append("| " + " | ".join([f"{label} ({unit})"] + row) + " |")
     return lines
 
 
-def _ours_only(rows: list[dict], scenario: str, key: str, fmt: str) -> str:
-    vals = [v for v in nc.series(rows, "ours", scenario, key).values()
+def _ours_only(rows: list[dict], ours: str, scenario: str, key: str, fmt: str) -> str:
+    vals = [v for v in nc.series(rows, ours, scenario, key).values()
             if v is not None and math.isfinite(v)]
     return fmt.format(statistics.median(vals)) if vals else "n/a"
 
 
 def _targets(rows: list[dict], scenario: str, judged: dict) -> list[str]:
     out = []
-    for side in nc.SIDES[1:]:
+    for side in _against_ours(judged):
         for key, label, unit, fmt in nc.METRICS:
             if key not in TARGETS:
                 continue
             p = Paired.from_dict(judged[side][key])
             if not p.n and key == "gyro_noise_dps":
-                verdict = (f"not measurable: ArduCopter's filtered gyro does not reach "
-                           f"silbridge (ours: median {_ours_only(rows, scenario, key, fmt)} "
-                           f"{unit})")
+                ours = _ours_only(rows, _ours_of(side), scenario, key, fmt)
+                verdict = (f"not measurable: {FOREIGN[side]}'s filtered gyro does not reach "
+                           f"silbridge (ours: median {ours} {unit})")
             elif not p.n:
                 verdict = "no pairs: no run of one side has it"
             elif p.verdict == "at_or_below":
@@ -121,7 +182,7 @@ def _targets(rows: list[dict], scenario: str, judged: dict) -> list[str]:
 def _losses(judged: dict) -> list[str]:
     """The metrics outside TARGETS that ours loses, per other side."""
     return [f"- {label} against {SIDE_LABELS[side]}: ours {judged[side][key]['text']}."
-            for side in nc.SIDES[1:] for key, label, _u, _f in nc.METRICS
+            for side in _against_ours(judged) for key, label, _u, _f in nc.METRICS
             if key not in TARGETS and judged[side][key]["verdict"] == "loses"]
 
 
@@ -130,7 +191,8 @@ def render(rows: list[dict], command: str, written: str) -> str:
     seeds = sorted({r["seed"] for r in rows if r["side"] == "ours"})
     w = nc.WINDOWS
     lines = [
-        "# Our harmonic notch against ArduCopter's, under vibration", "",
+        "# Our harmonic notch against ArduCopter's" + (" and PX4's" if _px4_intro(rows) else "")
+        + ", under vibration", "",
         f"Written by a command, never by hand; regenerate it with {code(command)} (fly more "
         f"seeds with `--run --seeds A-B`; every run flown is in the judgement). What the "
         "scenarios and the notch are: [the vibrating world](explanation/vibrating-world.md), "
@@ -146,23 +208,27 @@ def render(rows: list[dict], command: str, written: str) -> str:
         "to set it: its hover thrust. INS_HNTCH_MODE 3 (ESC telemetry) is not compared: "
         "ArduCopter 4.6's JSON interface takes no rotor speed. Why ours loses where it "
         "does: [against ArduCopter's notch](howto/harmonic-notch.md#against-arducopters-notch).",
-        ""]
+        "", *(line for part in _px4_intro(rows) for line in (part, ""))]
     for sc in judged:
         lines += [f"## {sc}", ""]
         for side in nc.SIDES:
-            lines.append(f"- {SIDE_LABELS[side]}: {code(_params_line(rows, sc, side))}")
-        lines += ["", "Targets (issue 27: at or below ArduCopter with its notch, N >= 10):", ""]
+            if any(r["scenario"] == sc and r["side"] == side for r in rows):
+                lines.append(f"- {SIDE_LABELS[side]}: {code(_params_line(rows, sc, side))}")
+        lines += ["", "Targets (issue 27: at or below the other FC with its notch, N >= 10):",
+                  ""]
         lines += _targets(rows, sc, judged[sc]) + [""]
         losses = _losses(judged[sc])
         if losses:
             lines += ["Other metrics where ours loses:", ""] + losses + [""]
-        for side in nc.SIDES[1:]:
-            lines += [f"**Ours against {SIDE_LABELS[side]}, paired by seed**", ""]
+        for side in judged[sc]:
+            ours = SIDE_LABELS[_ours_of(side)]
+            lines += [f"**{ours[:1].upper() + ours[1:]} against "
+                      f"{SIDE_LABELS[side]}, paired by seed**", ""]
             lines += _table(rows, sc, side, judged[sc][side]) + [""]
-    lines += [method_line("ours", "ArduCopter"), "",
-              "Gyro noise after filtering is n/a for ArduCopter: its filtered gyro never "
-              "crosses the link silbridge sees ([metrics](reference/metrics.md#noise-metrics)"
-              f"). Fewer than {MIN_PAIRS} pairs give no verdict; the issue asks for 10."]
+    lines += [method_line("ours", "the other FC"), "",
+              "Gyro noise after filtering is n/a for ArduCopter and PX4: their filtered gyro "
+              "never crosses the link silbridge sees ([metrics](reference/metrics.md#noise-"
+              f"metrics)). Fewer than {MIN_PAIRS} pairs give no verdict; the issue asks for 10."]
     return "\n".join(lines).rstrip() + "\n"
 
 
@@ -178,6 +244,11 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--arducopter", default=None, metavar="PATH",
                    help="with --run: the arducopter SITL binary (default "
                         "$SILBRIDGE_ARDUCOPTER, then `arducopter` on PATH)")
+    p.add_argument("--sides", default=",".join(nc.SIDES),
+                   help="with --run: comma-separated sides to fly (default %(default)s)")
+    p.add_argument("--px4", default=None, metavar="PATH",
+                   help="with --run: the px4 SITL binary, etc/ beside its bin/ (default "
+                        "$SILBRIDGE_PX4, then `px4` on PATH)")
     p.add_argument("--jobs", type=int, default=1,
                    help="with --run: runs at a time (default %(default)s)")
     p.add_argument("--out", default=str(DEFAULT_OUT), metavar="FILE",
@@ -190,10 +261,17 @@ def main(argv: list[str] | None = None) -> int:
     work = Path(args.work)
     try:
         if args.run:
-            from silbridge.tools.autopilots.ardupilot.sitl import require_arducopter
-            binary = require_arducopter(args.arducopter)
+            sides = _sides(args.sides)
+            arducopter = px4 = None
+            if any(nc.FC_OF_SIDE[s] == "ardupilot" for s in sides):
+                from silbridge.tools.autopilots.ardupilot.sitl import require_arducopter
+                arducopter = require_arducopter(args.arducopter)
+            if any(nc.FC_OF_SIDE[s] == "px4" for s in sides):
+                from silbridge.tools.autopilots.px4.sitl import require_px4
+                px4 = require_px4(args.px4)[0]
             scenarios = [s.strip() for s in args.scenarios.split(",") if s.strip()]
-            fly(scenarios, _seeds(args.seeds), work, binary, args.jobs)
+            fly(scenarios, _seeds(args.seeds), work, sides=sides, arducopter=arducopter,
+                px4=px4, jobs=args.jobs)
         rows = nc.load_runs(work)
     except Exception as exc:  # noqa: BLE001 - only user-facing errors are shortened
         if getattr(exc, "user_facing", False):

@@ -51,7 +51,8 @@ RATE_KEYS = {
 # Channels whose sim time may repeat (several rows for one instant).
 # /setpoint: a scenario may script two setpoints for one step; /fc/target: an external FC's
 # reports are stamped when read, and two may be read at one physics step.
-NON_STRICT = {"/timing", "/setpoint", "/fc/target"}
+# /fc/ftn2: one row per peak slot at the same time, as ArduCopter writes FTN2
+NON_STRICT = {"/timing", "/setpoint", "/fc/target", "/fc/ftn2"}
 _FAILED = re.compile(r"\bfail(ed|s|ure)?\b", re.IGNORECASE)
 ROUNDING_SLACK = 2  # samples: first/last sample conventions differ by one at each end
 

@@ -414,6 +414,9 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         "interrupted": res.interrupted,
         # Records the SIL link's faults delayed and dropped (bridge/link_faults.py).
         "link": res.link,
+        # Per fault unit: switches on/off and FAULT records from the FC, only when the run had
+        # faults (bridge/fault_records.py fault_summary), so a user sees the entries acted.
+        **({"faults": res.faults} if res.faults else {}),
         **({"mavlink": fc_summary["mavlink"]} if "mavlink" in fc_summary else {}),
     }
 
@@ -449,6 +452,10 @@ def print_summary(s: dict, out=print) -> None:
         out(f"link faults: sensor records delayed {link['sensor_delayed']}, dropped "
             f"{link['sensor_dropped']}; PWM records delayed {link['pwm_delayed']}, dropped "
             f"{link['pwm_dropped']}")
+    faults = s.get("faults") or {}
+    if faults:
+        out("faults: " + "; ".join(f"{u} on {c['on']} off {c['off']}, FAULT records "
+                                   f"{c['fault_records']}" for u, c in faults.items()))
     rt = s.get("rates") or {}
     if rt.get("degraded"):
         out(f"DEGRADED real time (slow host): IMU {rt['imu_hz']:.1f} Hz (want "

@@ -1,9 +1,9 @@
-"""The failure benchmark, `silbridge bench --suite failures`: F1..F10, one fault class each
+"""The failure benchmark, `silbridge bench --suite failures`: F1..F12, one fault class each
 in the phase where it hurts most, flown by the nav suite's scripted MAVLink client against
 our FC, ArduCopter and PX4 on the same JSBSim physics, seeds and fault times, and scored
 from the bridge's ground truth (docs/howto/failure-bench.md).
 
-failures.toml       F1..F10: phase, end, and the [[failure]] entries (physics.toml under them)
+failures.toml       F1..F12: phase, end, and the [[failure]] entries (physics.toml under them)
 plans.py            the plans read and checked; each run's scenario file
 translate.py        how each fault reaches each autopilot (ArduCopter's SIM_* table)
 failsafe_params.py  the failsafe settings made equal across the three

@@ -14,6 +14,7 @@ from silbridge.tools.benchmark.failures.plans import PLANS, PlanRun, write_scena
 from silbridge.tools.benchmark.failures.runs import RUNNERS
 from silbridge.tools.benchmark.failures.scoring import load_truth, score
 from silbridge.tools.benchmark.failures.translate import unreachable
+from silbridge.tools.benchmark.failures.watch import ALERT_SEVERITY
 from silbridge.tools.benchmark.table1_compare import FC_LABELS
 from silbridge.tools.logs.log_format import LogError
 
@@ -68,7 +69,11 @@ def run_one(fc: str, name: str, seed: int, out_dir: str, **kw) -> FailureResult:
             if "not_in_phase" not in m:
                 r.status, r.metrics = "ok", m
             elif flight.status == "ok":
-                r.status, r.reason = "not_in_phase", m["not_in_phase"]
+                # what the autopilot said before the fault tells why it was not flying it
+                said = [x[2] for x in flight.timeline.texts
+                        if x[0] < plan.fault_on_s and x[1] <= ALERT_SEVERITY][:3]
+                r.status, r.reason = "not_in_phase", m["not_in_phase"] + (
+                    f"; before it: {' / '.join(said)}" if said else "")
     return r
 
 
@@ -104,7 +109,9 @@ def run_failure_campaign(fcs, plans, runs: int, base_seed: int, out_dir: str, *,
                     + (f" ({r.reason})" if r.reason else "")
                     + (f" detect={m['detect_s']:.3g}s action={m['action']} "
                        f"outcome={m['outcome']} dev_h={m['dev_h_m']:.3g}m "
-                       f"dev_v={m['dev_v_m']:.3g}m land={m['land_dist_m']:.3g}m" if m else "")
+                       f"dev_v={m['dev_v_m']:.3g}m land={m['land_dist_m']:.3g}m "
+                       f"disarm={m['disarm']} {m['disarm_s']:.3g}s by={m['detected_by']!r}"
+                       if m else "")
                     + f" [{r.wall_s:.0f} s wall]")
                 results.append(r)
     return results

@@ -1,4 +1,4 @@
-"""`silbridge bench --suite failures`: F1..F10 through the shared suite runner
+"""`silbridge bench --suite failures`: F1..F12 through the shared suite runner
 (tools/benchmark/suite_command.py): options checked before any run, the campaign, the table
 (printed, --json, OUT/failures.md, OUT/failures.json) and the results page
 (OUT/failures-report.md)."""

@@ -1,4 +1,4 @@
-"""F1..F10 as the suite reads them: failures.toml's plans, checked against the fault catalog,
+"""F1..F12 as the suite reads them: failures.toml's plans, checked against the fault catalog,
 and the scenario each run flies (physics.toml plus the plan's [[failure]] entries).
 
 The phase times are the same for every autopilot and every plan: the client takes off as
@@ -29,11 +29,12 @@ MISSION_NE = ((80.0, 0.0), (80.0, 80.0), (0.0, 80.0), (0.0, 0.0))
 
 @dataclass(frozen=True)
 class FailurePlan:
-    name: str                # F1..F10
+    name: str                # F1..F12
     title: str
     phase: str               # "hold" or "mission"
     end_s: float             # sim time the run ends unless it landed and disarmed first
     failures: tuple          # dicts: the [[failure]] entries, as written in failures.toml
+    physics: tuple = ()      # (key, value) of [plan.physics]: the scenario's [physics] keys
 
     @property
     def fault_on_s(self) -> float:
@@ -89,7 +90,8 @@ def load_plans(path: Path = PLANS_TOML) -> dict[str, FailurePlan]:
         if p["phase"] not in ("hold", "mission"):
             raise PlanError(f"{path}: {p['name']}: phase is hold or mission, not {p['phase']!r}")
         plans[p["name"]] = FailurePlan(p["name"], p["title"], p["phase"], float(p["end_s"]),
-                                       tuple(dict(f) for f in p["failure"]))
+                                       tuple(dict(f) for f in p["failure"]),
+                                       tuple(p.get("physics", {}).items()))
     return plans
 
 
@@ -97,7 +99,7 @@ PLANS = load_plans()
 
 
 def plan_names(text: str) -> list[str]:
-    """--scenarios of the failures suite: F1..F10, comma-separated ("all" = every one)."""
+    """--scenarios of the failures suite: F1..F12, comma-separated ("all" = every one)."""
     names = [n.strip().upper() for n in text.split(",") if n.strip()]
     if names == ["ALL"]:
         return list(PLANS)
@@ -120,8 +122,13 @@ def _toml_value(v) -> str:
 
 
 def scenario_text(plan: FailurePlan) -> str:
-    """physics.toml with the plan's engine faults appended as [[failure]] entries."""
+    """physics.toml with the plan's [physics] keys and its engine faults appended as
+    [[failure]] entries."""
     parts = [PHYSICS_TOML.read_text().rstrip(), ""]
+    if plan.physics:
+        parts.append(f"[physics]   # {plan.name}")
+        parts += [f"{k} = {_toml_value(v)}" for k, v in plan.physics]
+        parts.append("")
     for f in plan.engine_failures():
         parts.append(f"[[failure]]   # {plan.name}")
         parts += [f"{k} = {_toml_value(v)}" for k, v in f.items()]

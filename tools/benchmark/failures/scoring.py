@@ -2,7 +2,9 @@
 did (the bridge's ground truth, never the autopilot's telemetry). Pure functions of those.
 
 - detection: the first alert text (severity WARNING or worse) or failsafe mode change from
-  the fault's start to DETECT_GRACE_S after its end; the time from the fault's start.
+  the fault's start to DETECT_GRACE_S after its end; the time from the fault's start. Our
+  FC's echo of the injection itself ("Failure injected: rc lost", fc_sil/fault_inject.py,
+  for the FC-side units a scenario switches) is not a detection.
 - action: the first mode change in that window (or a disarm in the air), by name: LAND,
   RTL, ALT_HOLD ...; none. A mission that ends by itself into a hold at its last waypoint
   (PX4 switches to Hold there) is the mission ending, not an action.
@@ -14,6 +16,9 @@ did (the bridge's ground truth, never the autopilot's telemetry). Pure functions
   then moves the vehicle on purpose); mission: the distance to the mission's path and to
   its height, until the autopilot acted or the fault ended.
 - landing distance: after an RTL from home, otherwise from the point where the fault hit.
+- disarm: the first disarm after the fault, "on the ground" or "in the air" (higher than
+  GROUND_M), or "none", and its time from the fault: a crash check disarms on the ground
+  after the impact (F12), a landing's disarm follows the touchdown.
 """
 
 from __future__ import annotations
@@ -26,6 +31,10 @@ import numpy as np
 from silbridge.tools.benchmark.failures.plans import ALT_M, MISSION_NE
 from silbridge.tools.benchmark.failures.watch import ALERT_SEVERITY
 
+# Texts that are not the autopilot detecting anything: our FC echoing an injection
+# (fc_sil/fault_inject.py) and the simulator's own notices ("SIM: IMU 900<1000Hz ...",
+# fc_sil/sim_notice.py), which a link fault's dropped records trigger by design.
+NOT_DETECTIONS = ("Failure injected:", "Failure cleared:", "SIM: ")
 DETECT_GRACE_S = 10.0    # a failsafe with its own timer may act this long after the fault
 GROUND_M = 0.5           # below this height above home the vehicle is on the ground [m]
 CRASH_M_S = 3.0          # meeting the ground faster than this is a crash [m/s]
@@ -125,10 +134,24 @@ def _changes(fc: str, timeline, on_s: float, until_s: float, truth: Truth, phase
     return out
 
 
+def disarm_time(timeline, on_s: float) -> float:
+    """Sim time of the first disarm after the fault (the run's whole remainder), or nan."""
+    return next((t for t, _, armed in timeline.modes if t >= on_s and not armed), math.nan)
+
+
+def disarm(timeline, on_s: float, truth: Truth) -> str:
+    """Where the first disarm after the fault happened."""
+    t = disarm_time(timeline, on_s)
+    if math.isnan(t):
+        return "none"
+    return "in the air" if truth.alt[truth.at(t)] > GROUND_M else "on the ground"
+
+
 def detection(fc: str, timeline, on_s: float, until_s: float, action) -> tuple:
     """(seconds from the fault, what said it) of the first alert or action, or (nan, "")."""
     alert = next(((t, text) for t, sev, text in timeline.texts
-                  if on_s <= t < until_s and sev <= ALERT_SEVERITY), None)
+                  if on_s <= t < until_s and sev <= ALERT_SEVERITY
+                  and not text.startswith(NOT_DETECTIONS)), None)
     hits = [h for h in (alert, action) if h is not None]
     if not hits:
         return math.nan, ""
@@ -193,6 +216,7 @@ def score(fc: str, plan, flight, truth: Truth) -> dict:
     volts_after = [v for t, v in tl.volts if t >= on]
     return {"detect_s": detect_s, "detected_by": detect_by, "action": name,
             "action_s": (action[0] - on) if action else math.nan, "outcome": out,
+            "disarm": disarm(tl, on, truth), "disarm_s": disarm_time(tl, on) - on,
             "dev_h_m": dev_h, "dev_v_m": dev_v, "land_dist_m": land,
             "land_expected": "home" if home else "fault point",
             "volts_at_fault": volts_before[-1] if volts_before else math.nan,

@@ -21,8 +21,9 @@ from silbridge.tools.benchmark.table1_compare import FC_LABELS
 NUMBERS = [("detect_s", "detection after the fault [s]"),
            ("dev_h_m", "worst horizontal deviation [m]"),
            ("dev_v_m", "worst vertical deviation [m]"),
-           ("land_dist_m", "landing distance from the expected point [m]")]
-WORDS = [("action", "action taken"), ("outcome", "outcome")]
+           ("land_dist_m", "landing distance from the expected point [m]"),
+           ("disarm_s", "disarmed after the fault [s]")]
+WORDS = [("action", "action taken"), ("outcome", "outcome"), ("disarm", "disarmed")]
 BASE = "ours"
 NOTE_CHARS = 240       # a reason longer than this is cut in the table (failures.json has it all)
 
@@ -54,9 +55,11 @@ def summarize(results, fcs: list[str]) -> dict:
             e["runs"][fc] = dict(Counter(r.status for r in rs))
             e["reasons"][fc] = list(dict.fromkeys(r.reason for r in rs if r.reason))
             for key, _ in NUMBERS:
-                e["numbers"].setdefault(key, {})[fc] = _median(r.metrics[key] for r in ok)
+                e["numbers"].setdefault(key, {})[fc] = _median(r.metrics.get(key) for r in ok)
             for key, _ in WORDS:
-                e["words"].setdefault(key, {})[fc] = dict(Counter(r.metrics[key] for r in ok))
+                # .get: parts flown before a word existed (merge.py) have none for it
+                e["words"].setdefault(key, {})[fc] = dict(Counter(
+                    r.metrics[key] for r in ok if r.metrics.get(key) is not None))
             e["detected_by"][fc] = list(dict.fromkeys(r.metrics["detected_by"] for r in ok
                                                       if r.metrics["detected_by"]))
         e["paired"] = _paired(mine, fcs)

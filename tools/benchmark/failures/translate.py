@@ -1,4 +1,4 @@
-"""How each fault of F1..F10 reaches each autopilot: the one translation table.
+"""How each fault of F1..F12 reaches each autopilot: the one translation table.
 
 The bridge's fault engine (bridge/faults/) applies every fault to what the bridge sends:
 the IMU samples, the motors' thrust, the battery pack, the SIL link, and the GNSS, baro
@@ -9,7 +9,10 @@ its own GPS, barometer and compass from the true state: for those, the same faul
 through ArduCopter's own SIM_* parameters, at the fault's sim time, by the benchmark
 (watch.py sends them from the physics step at which the engine switches the fault, so
 both happen on the same step). The ground-station link loss is the client's own for
-every autopilot: it stops sending for the fault's duration.
+every autopilot: it stops sending for the fault's duration. The RC receiver is the
+autopilot's own: our FC's scenario [[failure]] rc entry switches its SIM_RC_FAIL
+(tools/loop/fc_param_events.py), ArduCopter gets SIM_RC_FAIL at the same step, and PX4 is
+not flown on it (it flies the bench without RC, so there is no RC link to lose).
 
 The battery: the bridge's pack (bridge/battery/) reaches our FC only. ArduCopter's JSON
 reply carries no battery, so its SITL reads the constant SIM_BATT_VOLTAGE: it boots with
@@ -39,11 +42,12 @@ from typing import Callable
 from silbridge.tools.benchmark.nav.geo import radii_m
 
 BRIDGE, CLIENT, SIM_PARAM, NONE = "bridge", "client", "SIM_* parameter", "not reachable"
+FC_SIDE = "FC side"      # our FC's own link, switched by its SIM_* parameter at the step
 
 
 @dataclass(frozen=True)
 class Route:
-    how: str                 # BRIDGE, CLIENT, SIM_PARAM or NONE
+    how: str                 # BRIDGE, CLIENT, SIM_PARAM, FC_SIDE or NONE
     text: str                # what the autopilot meets, for the report
     on: Callable[[dict, float], dict] | None = None   # (params, home lat) -> SIM_* values
     # (a value may be a function of the simulator, evaluated at the fault's step)
@@ -61,18 +65,21 @@ def _glitch(p: dict, lat_deg: float) -> dict:
 
 
 def pack_ocv_v(sim) -> float:
-    """The physics pack's open-circuit voltage now [V] (bridge/battery/cell.py)."""
-    from silbridge.bridge.battery.cell import ocv_v
-    pack = sim.battery.pack
-    return sum(ocv_v(s) - o for s, o in zip(pack.soc, pack.offset_v))
+    """The physics pack's open-circuit voltage now [V]: the pack (bridge/src/battery.h) is its
+    cells' summed open-circuit voltage E behind their summed resistance, V = E - I R, so two
+    solutions under different loads, without advancing the pack, give E exactly."""
+    b = sim.battery
+    v0, i0 = b.solve(0.0)           # the avionics alone
+    v1, i1 = b.solve(100.0)
+    return v0 + i0 * (v0 - v1) / (i1 - i0)
 
 
 def pack_loaded_v(sim) -> float:
     """The pack's terminal voltage now [V], its state after any fault switched this step,
-    under the ESCs' power of its last report (bridge/battery/pack.py solve)."""
-    pack = sim.battery.pack
-    esc_w = pack.voltage_v * max(0.0, pack.current_a - pack.avionics_a)
-    return round(pack.solve(esc_w)[0], 3)
+    under the ESCs' power of its last report (bridge/battery solve)."""
+    b = sim.battery
+    esc_w = b.voltage_v * max(0.0, b.current_a - b.cfg.avionics_a)
+    return round(b.solve(esc_w)[0], 3)
 
 
 def _ap_battery(p: dict, _lat: float) -> dict:
@@ -80,7 +87,7 @@ def _ap_battery(p: dict, _lat: float) -> dict:
 
 
 def _px4_capacity(p: dict, _lat: float) -> dict:
-    return {"SIM_BAT_MIN_PCT": lambda sim: round(100.0 * sim.battery.pack.remaining, 2),
+    return {"SIM_BAT_MIN_PCT": lambda sim: round(100.0 * sim.battery.remaining, 2),
             "SIM_BAT_DRAIN": 1.0}
 
 
@@ -130,13 +137,18 @@ ARDUCOPTER = {
                           lambda p, lat: {"SIM_RC_FAIL": 1}, {"SIM_RC_FAIL": 0}),
     ("gcs", "lost"): _CLIENT,
 }
-OURS = {("gcs", "lost"): _CLIENT}
+OURS = {("gcs", "lost"): _CLIENT,
+        ("rc", "lost"): Route(FC_SIDE, "the scenario's rc entry sets our SIM_RC_FAIL 1 for its "
+                              "duration: no pilot input reaches the FC (fc_sil/radio_failsafe.py)")}
 PX4 = {
     ("battery", "capacity_loss"): Route(
         SIM_PARAM, "SIM_BAT_MIN_PCT = the pack's remaining charge after the loss, "
         "SIM_BAT_DRAIN 1 s", _px4_capacity),
     ("battery", "weak_cell"): Route(NONE, "PX4's SITL battery has no per-cell model"),
-    ("rc", "lost"): Route(NONE, "PX4 flies here without RC (COM_RC_IN_MODE 4)"),
+    ("rc", "lost"): Route(NONE, "PX4 flies the bench without RC "
+                          "(COM_RC_IN_MODE 4, stick input off), so there is no RC link to lose; "
+                          "an RC link of MANUAL_CONTROL (COM_RC_IN_MODE 1) would change its "
+                          "setup for every plan"),
     ("gcs", "lost"): _CLIENT,
 }
 # SIM_* values each autopilot boots with, beside its failsafe settings (functions of the

@@ -35,6 +35,11 @@ class Failed(Exception):
     """The vehicle accepted the plan but did not fly it within its budget."""
 
 
+class TimedOut(Failed):
+    """A wait's sim-time budget passed (a retry may follow); the other Failed ends the
+    flight at once: the vehicle went silent or the run was interrupted."""
+
+
 class NavClient:
     def __init__(self, link, home_lat_deg: float, home_lon_deg: float, clock=None,
                  stop=None):
@@ -111,7 +116,7 @@ class NavClient:
         end = self.clock() + sim_s
         while not done():
             if self.clock() > end:
-                raise Failed(f"{what}: not within {sim_s:g} s of sim time"
+                raise TimedOut(f"{what}: not within {sim_s:g} s of sim time"
                              + (f"; the vehicle said: {' | '.join(self.texts[-3:])}"
                                 if self.texts else ""))
             self.pump()
@@ -148,7 +153,7 @@ class NavClient:
             try:
                 self.wait_until(lambda: cmd in self.acks, 1.0, "ack")
                 return self.acks[cmd]
-            except Failed:
+            except TimedOut:    # resend; a silent vehicle's clock stands still: not this
                 continue
         raise Failed(f"no COMMAND_ACK for command {cmd}")
 
