@@ -7,6 +7,9 @@
 
 #define FC_ALT_P0_TAU_S 1.0f   /* ground-pressure and accel-bias EMAs while disarmed */
 #define FC_ALT_MAX_BARO_DT_S 0.2f /* a longer baro gap is corrected as if 0.2 s */
+#define FC_ALT_GATE_M 1.5f        /* a larger innovation is a jump: height only (.h) */
+#define FC_ALT_GATE_OUT_M 0.5f    /* until the height has caught up to within this */
+#define FC_ALT_GATE_MAX_S 10.0f   /* then the full correction again (.h) */
 
 void fc_alt_est_reset(fc_alt_est_t *e)
 {
@@ -18,6 +21,9 @@ void fc_alt_est_reset(fc_alt_est_t *e)
     e->baro_alt_m = 0.0f;
     e->innov_m = 0.0f;
     e->last_baro_ns = 0;
+    e->gated_since_ns = 0;
+    e->gated = false;
+    e->height_only = false;
     e->have_baro = false;
     e->rejected = 0;
 }
@@ -43,6 +49,20 @@ void fc_alt_est_predict(fc_alt_est_t *e, const float q_wxyz[4], const float acce
     e->climb_m_s += a_up * dt_s;
 }
 
+/* True while this innovation is a jump to correct the height only (see the header). */
+static bool baro_jump(fc_alt_est_t *e, int64_t sim_ns, float err)
+{
+    if (!(fabsf(err) > (e->gated ? FC_ALT_GATE_OUT_M : FC_ALT_GATE_M))) {
+        e->gated = false;
+        return false;
+    }
+    if (!e->gated) {
+        e->gated = true;
+        e->gated_since_ns = sim_ns;
+    }
+    return (float)(sim_ns - e->gated_since_ns) * 1e-9f < FC_ALT_GATE_MAX_S;
+}
+
 fc_status_t fc_alt_est_baro(fc_alt_est_t *e, int64_t sim_ns, float pressure_pa, float tau_s,
                             bool calibrate)
 {
@@ -66,6 +86,8 @@ fc_status_t fc_alt_est_baro(fc_alt_est_t *e, int64_t sim_ns, float pressure_pa, 
         e->alt_m = e->baro_alt_m;
         e->climb_m_s = 0.0f;
         e->innov_m = 0.0f;
+        e->gated = false;
+        e->height_only = false;
     } else {
         const float tau = fmaxf(tau_s, 0.05f);
         const float err = e->baro_alt_m - e->alt_m;
@@ -75,8 +97,11 @@ fc_status_t fc_alt_est_baro(fc_alt_est_t *e, int64_t sim_ns, float pressure_pa, 
         const float k2 = fminf(3.0f / (tau * tau) * dt_s, 1.0f);
         const float k3 = fminf(1.0f / (tau * tau * tau) * dt_s, 1.0f);
         e->alt_m += k1 * err;
-        e->climb_m_s += k2 * err;
-        e->accel_bias_m_s2 -= k3 * err; /* alt lagging the baro: the accel under-reads */
+        e->height_only = baro_jump(e, sim_ns, err);
+        if (!e->height_only) {
+            e->climb_m_s += k2 * err;
+            e->accel_bias_m_s2 -= k3 * err; /* alt lagging the baro: the accel under-reads */
+        }
     }
     e->last_baro_ns = sim_ns;
     e->have_baro = true;

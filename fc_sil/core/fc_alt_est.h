@@ -15,6 +15,13 @@
  * bias is learned there (an EMA of tau 1 s), so the filter starts right at
  * take-off instead of learning it from the baro in flight.
  *
+ * A baro jump (an innovation beyond FC_ALT_GATE_M, which fault-free flight stays well
+ * below: at most 0.68 m in S1..S4) corrects the height only, not the climb rate or the
+ * bias: the third-order filter would otherwise read the jump as a climb and overshoot it by
+ * its design's 21 % (failure bench F3: a 5 m baro glitch took ours 7.6 m down where
+ * ArduCopter's EKF3, which keeps its climb rate on the GNSS, went 5 m). The gate gives up
+ * after FC_ALT_GATE_MAX_S, so an accelerometer that really drifts is still corrected.
+ *
  * Baro altitude: the ISA relation h = 44330.77 (1 - (p/p0)^0.190263) m with p0
  * the ground pressure, learned while disarmed (an EMA of tau 1 s) and frozen
  * at arming, so altitude is relative to where the vehicle was armed.
@@ -36,6 +43,9 @@ typedef struct fc_alt_est {
     float baro_alt_m;         /* last baro altitude over p0 [m] */
     float innov_m;            /* last in-flight baro innovation, baro - estimate [m] */
     int64_t last_baro_ns;     /* sim time of the last baro sample [ns] */
+    int64_t gated_since_ns;   /* sim time the innovation went beyond the gate (if gated) */
+    bool gated;               /* the innovation is beyond the gate */
+    bool height_only;         /* the last sample corrected the height only (a jump) */
     bool have_baro;
     uint32_t rejected;        /* baro samples refused (non-finite, <= 0 Pa) */
 } fc_alt_est_t;

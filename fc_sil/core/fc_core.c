@@ -281,10 +281,12 @@ fc_status_t fc_core_baro_step(fc_core_t *c, int64_t sim_ns, float pressure_pa)
     if (c->alt_est.have_baro && sim_ns > c->alt_est.last_baro_ns) {
         dt_s = fminf((float)(sim_ns - c->alt_est.last_baro_ns) * 1e-9f, FC_MAX_IMU_DT_S);
     }
+    /* While a baro jump is corrected (fc_alt_est.h) the time constant stays: the jump would
+     * otherwise ask for the fast one, through the innovation and the distance to the target. */
     const float tau_s =
-        fc_alt_sched_step(&c->alt_sched, &c->cfg.alt_sched, alt_seek_demand(c),
-                          c->alt_est.innov_m,
-                          dt_s);
+        c->alt_est.height_only ? c->alt_sched.tc_s
+                         : fc_alt_sched_step(&c->alt_sched, &c->cfg.alt_sched,
+                                             alt_seek_demand(c), c->alt_est.innov_m, dt_s);
     fc_status_t st = fc_alt_est_baro(&c->alt_est, sim_ns, pressure_pa, tau_s,
                                      c->in.armed == 0);
     if (st != FC_OK) {

@@ -25,6 +25,7 @@ class VerticalPlant:
         self.v = 0.0
         self.u = np.zeros(4)
         self.specific_force_z = -G
+        self.baro_offset_m = 0.0        # the baro reads this much higher (a baro fault)
 
     def step(self, pwm_us, dt):
         cmd = np.clip((np.asarray(pwm_us[:4], float) - 1000.0) / 1000.0, 0.0, 1.0)
@@ -53,7 +54,8 @@ def fly(fc, plant, seconds, t0_ms=0, on_tick=None):
         if k % 10 == 0:
             b = R.empty(R.Kind.BARO, 1)
             b["sim_ns"] = k * 1_000_000
-            b["pressure_pa"] = 101325.0 * (1 - 2.25577e-5 * plant.h) ** 5.25588 \
+            b["pressure_pa"] = 101325.0 * (1 - 2.25577e-5 * (plant.h + plant.baro_offset_m)) \
+                ** 5.25588 \
                 + rng.normal(0, 0.5)
             recs.append(R.as_generic(b))
         pwm, st = fc.step_batch(np.concatenate(recs))

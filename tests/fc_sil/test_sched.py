@@ -130,3 +130,22 @@ def test_mahony_block_boost_follows_a_persistent_error_not_a_noisy_one():
 
     assert run(sign_flip=False) == pytest.approx(3.0, rel=0.02)
     assert run(sign_flip=True) == pytest.approx(1.0, abs=0.05)
+
+
+def test_a_baro_jump_moves_the_height_without_a_false_climb():
+    # Holding 6 m, the baro starts reading 3 m high (a baro glitch: the accelerometer saw no
+    # motion). The vehicle must sink the 3 m the baro says, and no further: the jump corrects
+    # the estimate's height only, not its climb rate (fc_alt_est.h). Without that, the
+    # third-order filter read the jump as a climb, the vehicle dived at 2.6 m/s and went
+    # 1.5 m past the 3 m (failure bench F3: 7.6 m on a 5 m glitch).
+    fc = FlightCore()
+    plant = A.VerticalPlant(hover_throttle=0.35)
+    fc.arm()
+    fc.set_altitude_target(6.0)
+    A.fly(fc, plant, 16.0)
+    assert plant.h == pytest.approx(6.0, abs=0.1)
+    plant.baro_offset_m = 3.0
+    _, h, v = A.fly(fc, plant, 15.0, t0_ms=16000)
+    assert h.min() > 6.0 - 3.0 - 0.5, h.min()
+    assert np.abs(v).max() < 1.5, np.abs(v).max()
+    assert h[-1] == pytest.approx(3.0, abs=0.3)
