@@ -134,3 +134,20 @@ def test_fs_options_let_auto_and_guided_go_on_through_an_rc_loss():
     assert v.texts[0][1] == "Radio Failsafe - Continuing Guided Mode"
     v, _, _ = _rc_lost(CopterMode.GUIDED, FS_THR_ENABLE=3)       # no option: LAND
     assert v.mode.number == CopterMode.LAND
+
+
+def test_a_ground_stations_sticks_going_quiet_fail_safe_only_in_a_pilot_flown_mode():
+    """Pilot input from MANUAL_CONTROL that stops (not an injected loss): LOITER takes the
+    radio failsafe; AUTO and GUIDED fly on, as ArduCopter SITL's simulated receiver takes
+    over there when an override stops."""
+    clock = [0.0]
+    for mode, fails in ((CopterMode.LOITER, True), (CopterMode.AUTO, False),
+                        (CopterMode.GUIDED, False)):
+        v, fs = _Flying(mode), FailsafeMonitor()
+        v.pilot = PilotInput(clock=lambda: clock[0])
+        v.pilot.configure(RcConfig.from_params({p.name: p.default for p in PARAMS}.__getitem__))
+        v.pilot.manual_control(0, 0, 500, 0)
+        clock[0] += 5.0                              # no more input for 5 s of the link's time
+        _fly(v, fs, 1.0, None)
+        assert (v.mode.number != mode) == fails, (mode, v.texts)
+        assert any(t == "Radio Failsafe" for _, t in v.texts) == fails
