@@ -7,9 +7,10 @@ bit 0 AUTO, bit 2 GUIDED, bit 3 a landing; by default none). Latched until input
 
 Our pilot input is a ground station's MANUAL_CONTROL / RC override, aged on the wall clock as
 the link's own (pilot.py). When it stops, only a mode the pilot flies (fs_options.PILOT_MODES)
-takes the failsafe: in ArduCopter SITL an override that stops hands back to its simulated
-receiver, which never fails, so a MAVSDK script that sent manual control and then flies AUTO
-or GUIDED must not be sent home. An injected receiver loss (SIM_RC_FAIL, MAV_CMD_INJECT_FAILURE,
+takes the failsafe (a throttle below FS_THR_VALUE in it still acts in any mode): in
+ArduCopter SITL an override that stops hands back to its simulated receiver, which never
+fails, so a MAVSDK script that sent manual control and then flies AUTO or GUIDED must not
+be sent home. An injected receiver loss (SIM_RC_FAIL, MAV_CMD_INJECT_FAILURE,
 a scenario's rc unit) is timed on sim time from the step that first sees it, as ArduCopter
 SITL's SIM_RC_FAIL, whose RC_FS_TIMEOUT runs on its simulated clock: the failsafe then
 comes RC_FS_TIMEOUT of sim time after the loss at any --speed.
@@ -55,7 +56,7 @@ class RadioFailsafe:
         action = pilot.rc.fs_thr_action()
         if action is None or not (v.armed and v.airborne):
             return
-        if not pilot.lost and v.mode.number not in PILOT_MODES:
+        if not pilot.lost and not low and v.mode.number not in PILOT_MODES:
             return          # a ground station's sticks went quiet, not a receiver (above)
         going_on = continuing("Radio", v.mode.number, int(v.store.host("FS_OPTIONS")))
         v.statustext(mav.MAV_SEVERITY_WARNING,
