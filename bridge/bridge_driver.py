@@ -40,6 +40,8 @@ from .startup_checks import (
 
 _NS = 1_000_000_000
 _MIN_JUDGED_NS = _NS // 4
+# Two-process lockstep looks at the FC (alive, beating, not stopped) this often in wall time.
+LOOK_WALL_NS = 20_000_000
 
 
 @dataclass
@@ -269,26 +271,33 @@ class _Flight:
     def fly_batched_own_fc(self) -> None:
         """fly() for an FC in its own process in lockstep: the steps run in batches in C, each
         step waiting there for the FC's answer (BridgeLoop.bind_fc_process), each batch ending
-        at the 20 ms look at the FC (PeerWatch), the first window's checks, the duration. The
-        FC's own Python is its process's business. A step the FC did not answer within a
-        slice is finished by _wait_lockstep, which looks at the FC while it waits."""
+        at the first window's checks or the duration, or after BATCH_MAX_STEPS. The FC is
+        looked at (PeerWatch) after the batch that ends LOOK_WALL_NS of wall time after the
+        last look: a look every 20 ms of sim time, as the per-step loop does, would end a
+        batch every 20 steps, a quarter of a millisecond at 80x real time, and its Python
+        cost ~1 us a step. A dead FC is still found within a wait's slice: a step it does not
+        answer ends the batch, and _wait_lockstep looks at it while it waits. The FC's own
+        Python is its process's business."""
         loop, sim, every = self.loop, self.loop.sim, self.watch_every
 
         def batch(k, last) -> None:
-            if loop.in_python_next():       # a link fault (bridge/link_faults.py)
+            if loop.in_python_next():       # a link fault (bridge/link_faults.py), step by step
                 loop.step_one(lambda: _wait_lockstep(loop, self.peer))
                 if sim.step_index % every == 0:
                     self._look()
                 return
-            n = min(BATCH_MAX_STEPS, last - k + 1, every - (k - 1) % every)
+            n = min(BATCH_MAX_STEPS, last - k + 1)
             if k <= self.check_step:
                 n = min(n, self.check_step - k + 1)
             self.steps_in_c += loop.run_batch(n)
             if loop.fc_pending:
                 loop.fc_pending = False
                 _wait_lockstep(loop, self.peer)
-            if sim.step_index % every == 0:
+            now = time.monotonic_ns()
+            if now - self._looked_ns >= LOOK_WALL_NS:
+                self._looked_ns = now
                 self._look()
+        self._looked_ns = time.monotonic_ns()
         self._fly_batches(batch)
 
     def _fly_batches(self, batch) -> None:
