@@ -14,7 +14,6 @@ as an ESC does.
 
 from __future__ import annotations
 
-import hashlib
 import math
 import time
 from dataclasses import dataclass
@@ -72,7 +71,8 @@ class BridgeLoop:
         self.pwm_us = (1000.0, 1000.0, 1000.0, 1000.0)   # a tuple: cheapest to unpack per step
         self.armed = False
         self.stats = LoopStats()
-        self._hash = hashlib.blake2b(digest_size=16)
+        # hashlib's BLAKE2b digest, in an object a batch in C can feed too (step_batch.c)
+        self._hash = _step.Blake2b(digest_size=16)
         self._trace = trace
         self._pwm_buf = np.zeros(4096, dtype=RECORD_DTYPE)
         # Column views made once: per-step scalar reads then cost ~100 ns, not a view each.
@@ -96,6 +96,7 @@ class BridgeLoop:
         self._word = segment.word
         self._hash_update = self._hash.update
         self._io_stale = False      # the per-step path changed what the batch's words hold
+        self._kernel_hashes = False  # the bound batch feeds the trace hash itself
         self._rotor_rows = None
         # A sink may log the PWM elsewhere (the FC's side) and set pwm_records to None.
         self._log_pwm = getattr(sink, "pwm_records", None) if sink is not None else None
@@ -238,8 +239,10 @@ class BridgeLoop:
 
     def _bind_batches(self, capsule, fc_poll_c) -> None:
         """The batch's buffers, bound to the kernel with the FC's C poll (None: its own
-        process)."""
+        process) and the trace hash, which the batch feeds itself: each step's bytes while
+        they are hot, and in two-process mode while the FC computes its answer."""
         sim = self.sim
+        self._kernel_hashes = self._trace
         self._fc_own_process = fc_poll_c is None
         self.fc_pending = False
         slots = len(sim.buffer.buf) // _SLOT_BYTES
@@ -256,7 +259,8 @@ class BridgeLoop:
         sim.bind_lockstep(segment=capsule, fc_poll=fc_poll_c,
                           trace=self._trace_buf, pwm=self._pwm_buf, io=self._io,
                           errors=self._err, rotor=self._rotor_rows, bridge_word=ls.BRIDGE_SIM_NS,
-                          fc_word=ls.FC_SIM_NS)
+                          fc_word=ls.FC_SIM_NS,
+                          trace_hash=self._hash if self._kernel_hashes else None)
         self._io_stale = True
 
     def run_batch(self, n: int) -> int:
@@ -272,7 +276,7 @@ class BridgeLoop:
         done = self.sim.step_batch(min(n, BATCH_MAX_STEPS))
         w = self._iow
         used = w[_step.IO_TRACE_BYTES]
-        if used and self._trace:
+        if used and self._trace and not self._kernel_hashes:
             self._hash_update(self._trace_mv[:used])
         if w[_step.IO_OTHER_N]:     # the FC's FAULT records, routed before the next step
             at = w[_step.IO_OTHER_AT]

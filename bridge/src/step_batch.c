@@ -9,7 +9,9 @@
  * sensor ring, BRIDGE_SIM_NS -> the errors' sample, the rotor row -> the FC's C poll
  * (Core.poll_io, the record router) -> the PWM back, traced with wall_ns zeroed ->
  * FC_SIM_NS checked. The trace holds the bytes the trace hash would have been fed step by
- * step: blake2b hashes a stream, so Python hashing the batch's trace once gives the digest.
+ * step: blake2b hashes a stream, so Python hashing the batch's trace once gives the digest;
+ * with a trace hash bound (`trace_hash`, a _step.Blake2b) the batch hashes them itself,
+ * each step's while the FC in its own process computes its answer.
  *
  * A step whose kernel flags need Python (noise refills, a GNSS fix or setpoint due, ground
  * contact, crashes: the F_* flags above the count byte) ends the batch right after the
@@ -37,6 +39,8 @@ void sb_batch_clear(sb_batch *b)
     sb_step_release(&b->io);
     sb_step_release(&b->rotor);
     sb_step_release(&b->errors);
+    Py_CLEAR(b->hash_obj);
+    b->hash = NULL;
     memset(&b->ls, 0, sizeof b->ls);
 }
 
@@ -44,6 +48,7 @@ int sb_batch_traverse(sb_batch *b, visitproc visit, void *arg)
 {
     Py_VISIT(b->capsule);
     Py_VISIT(b->fc_poll.obj);
+    Py_VISIT(b->hash_obj);
     return 0;
 }
 
@@ -86,15 +91,19 @@ static int take_buffers(Kernel *self, PyObject *trace, PyObject *pwm, PyObject *
     return 0;
 }
 
-/* bind_lockstep(segment, fc_poll, trace, pwm, io, errors, rotor, bridge_word, fc_word) */
+/* bind_lockstep(segment, fc_poll, trace, pwm, io, errors, rotor, bridge_word, fc_word,
+ *               trace_hash=None) */
 PyObject *Kernel_bind_lockstep(Kernel *self, PyObject *args, PyObject *kwds)
 {
     static char *kwlist[] = {"segment", "fc_poll", "trace", "pwm", "io", "errors", "rotor",
-                             "bridge_word", "fc_word", NULL};
-    PyObject *cap, *poll, *trace, *pwm, *io, *errors, *rotor;
+                             "bridge_word", "fc_word", "trace_hash", NULL};
+    PyObject *cap, *poll, *trace, *pwm, *io, *errors, *rotor, *hash = Py_None;
     int bw, fw;
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OOOOOOOii", kwlist, &cap, &poll, &trace,
-                                     &pwm, &io, &errors, &rotor, &bw, &fw))
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OOOOOOOii|O", kwlist, &cap, &poll, &trace,
+                                     &pwm, &io, &errors, &rotor, &bw, &fw, &hash))
+        return NULL;
+    sb_blake2b *hash_state = hash == Py_None ? NULL : sb_step_hash_state(hash);
+    if (hash != Py_None && hash_state == NULL)
         return NULL;
     sb_batch *b = &self->batch;
     sb_batch_clear(b);
@@ -114,6 +123,10 @@ PyObject *Kernel_bind_lockstep(Kernel *self, PyObject *args, PyObject *kwds)
         return NULL;
     }
     b->capsule = Py_NewRef(cap);
+    if (hash_state != NULL) {
+        b->hash_obj = Py_NewRef(hash);
+        b->hash = hash_state;
+    }
     sb_call_set(&b->fc_poll, poll == Py_None ? NULL : poll);
     b->ls.api = api;
     b->ls.bridge_word = bw;
@@ -157,6 +170,19 @@ static int fc_poll(sb_batch *b, int64_t *io)
     return 0;
 }
 
+/* The batch's trace bytes not hashed yet into the bound trace hash (if any). Called right
+ * after a step's publish, before the wait for the FC's answer: in two-process mode the FC
+ * computes meanwhile, so the hash costs the step nothing (one process has no such wait and
+ * hashes on a worker thread instead: bridge/trace_hash.py). */
+static void hash_trace(sb_batch *b)
+{
+    const size_t used = (size_t)b->ls.io[SB_IO_TRACE_BYTES];
+    if (b->hash == NULL || used <= b->hashed)
+        return;
+    sb_blake2b_update(b->hash, b->ls.trace + b->hashed, used - b->hashed);
+    b->hashed = used;
+}
+
 /* The rest of a step the kernel has run, its `count` records in the slots: published, the
  * FC polled, the PWM collected. 1, 0 the FC did not answer, -1 error. */
 static int finish(Kernel *self, size_t count)
@@ -164,6 +190,7 @@ static int finish(Kernel *self, size_t count)
     sb_lockstep *l = &self->batch.ls;
     const int64_t k = self->step_index, sim_ns = k * self->dt_ns;
     sb_lockstep_publish(l, self->slots, count, sim_ns);
+    hash_trace(&self->batch);
     sb_lockstep_after_step(l, self->stage.state, k, sim_ns);
     if (self->batch.fc_poll.obj == NULL) {
         /* The FC in its own process: the lockstep hand-off (shm/include/sb_handoff.h). Not
@@ -228,6 +255,7 @@ PyObject *Kernel_run_batch(Kernel *self, PyObject *arg)
     int64_t *io = l->io;
     io[SB_IO_TRACE_BYTES] = io[SB_IO_PENDING] = io[SB_IO_DONE] = 0;
     io[SB_IO_FC_MISSED] = io[SB_IO_POLLS] = io[SB_IO_OTHER_N] = 0;
+    self->batch.hashed = 0;
     /* A step needs room for its records and the PWM of a poll (16: many per step). */
     const size_t step_bytes = (size_t)(self->n_slots + 16) * sizeof(sb_record);
     const Py_ssize_t rows = l->rotor != NULL ? (Py_ssize_t)l->rotor_rows : n;
@@ -238,6 +266,7 @@ PyObject *Kernel_run_batch(Kernel *self, PyObject *arg)
         if (rc == 0 || io[SB_IO_OTHER_N] != 0)     /* a FAULT for Python before the next step */
             break;
     }
+    hash_trace(&self->batch);   /* the last PWM: the hash is whole when Python looks */
     return PyLong_FromLongLong(io[SB_IO_DONE]);
 }
 
@@ -256,5 +285,8 @@ PyObject *Kernel_finish_step(Kernel *self, PyObject *arg)
         return NULL;
     }
     io[SB_IO_PENDING] = 0;
-    return finish(self, (size_t)count) < 0 ? NULL : PyLong_FromLongLong(io[SB_IO_DONE]);
+    if (finish(self, (size_t)count) < 0)
+        return NULL;
+    hash_trace(&self->batch);
+    return PyLong_FromLongLong(io[SB_IO_DONE]);
 }

@@ -14,6 +14,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "blake2b.h"
 #include "sb_records.h"
 #include "sensor_stage.h"
 #include "step_call.h"
@@ -45,6 +46,9 @@ typedef struct {
     Py_buffer io;             /* int64[SB_IO_WORDS] */
     Py_buffer rotor;          /* float64 (rows, 4): rotor speeds after each step, or none */
     Py_buffer errors;         /* float64[SB_ERR_COUNT] */
+    PyObject *hash_obj;       /* the trace hash's _step.Blake2b the batch feeds, or NULL */
+    sb_blake2b *hash;         /*   its state */
+    size_t hashed;            /*   trace bytes of this batch hashed so far */
 } sb_batch;
 
 typedef struct {
@@ -94,6 +98,10 @@ PyObject *Kernel_run_batch(Kernel *self, PyObject *arg);
 PyObject *Kernel_finish_step(Kernel *self, PyObject *arg);
 void sb_batch_clear(sb_batch *b);
 int sb_batch_traverse(sb_batch *b, visitproc visit, void *arg);
+
+/* step_hash.c: the Blake2b type; its state, or NULL with TypeError if obj is not one */
+extern PyTypeObject SbBlake2bType;
+sb_blake2b *sb_step_hash_state(PyObject *obj);
 
 /* step_config.c: configuration methods and attributes of the Kernel type */
 void sb_step_clear_forces(Kernel *self);

@@ -377,7 +377,7 @@ static int add_names(PyObject *m, const char *attr, const sb_named_double *table
 
 PyMODINIT_FUNC PyInit__step(void)
 {
-    if (PyType_Ready(&KernelType) < 0)
+    if (PyType_Ready(&KernelType) < 0 || PyType_Ready(&SbBlake2bType) < 0)
         return NULL;
     PyObject *m = PyModule_Create(&stepmodule);
     if (m == NULL)
@@ -385,6 +385,12 @@ PyMODINIT_FUNC PyInit__step(void)
     Py_INCREF(&KernelType);
     if (PyModule_AddObject(m, "Kernel", (PyObject *)&KernelType) < 0) {
         Py_DECREF(&KernelType);
+        Py_DECREF(m);
+        return NULL;
+    }
+    Py_INCREF(&SbBlake2bType);
+    if (PyModule_AddObject(m, "Blake2b", (PyObject *)&SbBlake2bType) < 0) {
+        Py_DECREF(&SbBlake2bType);
         Py_DECREF(m);
         return NULL;
     }
