@@ -218,7 +218,7 @@ class BridgeLoop:
         run cannot: an oversampled IMU (numpy per step), or a sink that logs the PWM here."""
         if fc_poll_c is None or not self.sim.batches or self._log_pwm is not None:
             return False
-        self._bind_batches(self.seg.c_capsule(), fc_poll_c)
+        self._bind_batches(self.seg.c_capsule(), fc_poll_c, kernel_hashes=False)
         return True
 
     def bind_fc_process(self) -> bool:
@@ -237,12 +237,14 @@ class BridgeLoop:
         self._bind_batches(capsule, None)
         return True
 
-    def _bind_batches(self, capsule, fc_poll_c) -> None:
+    def _bind_batches(self, capsule, fc_poll_c, kernel_hashes: bool = True) -> None:
         """The batch's buffers, bound to the kernel with the FC's C poll (None: its own
-        process) and the trace hash, which the batch feeds itself: each step's bytes while
-        they are hot, and in two-process mode while the FC computes its answer."""
+        process). kernel_hashes: the batch feeds the trace hash itself, each step's bytes
+        right after its publish, which with the FC in its own process is while the FC
+        computes its answer; else run_batch hashes the batch's trace once (one process:
+        nothing to overlap, and one call a batch is as cheap; docs/howto/speed.md)."""
         sim = self.sim
-        self._kernel_hashes = self._trace
+        self._kernel_hashes = kernel_hashes and self._trace
         self._fc_own_process = fc_poll_c is None
         self.fc_pending = False
         slots = len(sim.buffer.buf) // _SLOT_BYTES
