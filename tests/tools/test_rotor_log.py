@@ -4,6 +4,7 @@ physics step, written by the bridge side of a real closed-loop flight (JSBSim + 
 import math
 
 import numpy as np
+import pytest
 from mcap.reader import make_reader
 
 from silbridge.bridge.fdm import G0_M_S2
@@ -113,3 +114,42 @@ def test_two_process_flight_log_carries_rotor(tmp_path):
     np.testing.assert_array_equal(rows["sim_ns"], log.channels["/gt_att"]["sim_ns"])
     assert rows["omega_rad_s"].shape == (12_000, 4) and rows["omega_rad_s"][-1].min() > 300
     assert not list(tmp_path.glob("*.spool"))
+
+
+def test_spool_takes_a_batch_as_its_steps(tmp_path):
+    """write_rows (a lockstep batch's rows at once, which lets a logged two-process flight
+    keep its batches in C) spools the bytes the per-step calls would, flushes included."""
+    omega = np.random.default_rng(3).uniform(0, 900, (3000, 4))
+    sim_ns = np.arange(1, 3001, dtype=np.int64) * 1_000_000
+    rows = iter(omega.tolist())
+    per_step = RotorSpool(tmp_path / "a.spool", lambda: next(rows))
+    for t in sim_ns.tolist():
+        per_step.rotor(t)
+    batched = RotorSpool(tmp_path / "b.spool", None)
+    for at in range(0, 3000, 700):     # batches that cross the 1024-row flushes
+        batched.rotor.write_rows(sim_ns[at:at + 700], omega[at:at + 700])
+    per_step.close()
+    batched.close()
+    assert (tmp_path / "a.spool").read_bytes() == (tmp_path / "b.spool").read_bytes()
+
+
+def test_log_writer_takes_rows_as_packs(tmp_path):
+    """LogWriter.pack_rows: the same /rotor rows as one pack() per step, and a wrong dtype
+    is refused."""
+    omega = np.random.default_rng(4).uniform(0, 900, (1500, 4))
+    sim_ns = np.arange(1, 1501, dtype=np.int64) * 1_000_000
+    logs = []
+    for batched in (False, True):
+        path = tmp_path / f"{batched}.mcap"
+        with LogWriter(path, metadata=declare_rate({"config": {"seed": 1}}, 1000.0)) as w:
+            it = iter(omega.tolist())
+            log = RotorLog(w, lambda: next(it))
+            if batched:
+                log.write_rows(sim_ns, omega)
+                with pytest.raises(ValueError, match="dtype"):
+                    w.pack_rows(ROTOR_CHANNEL, np.zeros(3))
+            else:
+                for t in sim_ns.tolist():
+                    log(t)
+        logs.append(read_log(path).channels[ROTOR_CHANNEL])
+    np.testing.assert_array_equal(logs[0], logs[1])

@@ -53,6 +53,7 @@ class RotorLog:
     def __init__(self, writer, rotor_rad_s):
         writer.declare(ROTOR_CHANNEL, ROTOR_DTYPE)
         self._pack = writer.pack
+        self._pack_rows = writer.pack_rows
         self.rotor_rad_s = rotor_rad_s
 
     def __call__(self, sim_ns: int) -> None:
@@ -62,6 +63,21 @@ class RotorLog:
         o1, o2, o3, o4 = omega
         k = RPM_PER_RAD_S
         self._pack(ROTOR_CHANNEL, sim_ns, o1, o2, o3, o4, o1 * k, o2 * k, o3 * k, o4 * k)
+
+    def write_rows(self, sim_ns: np.ndarray, omega: np.ndarray) -> None:
+        """A lockstep batch's rows at once (bridge/bridge_loop.py): the bytes write() would
+        give row by row (a float64 product is the same in numpy as in Python), without a
+        Python call per physics step."""
+        self._pack_rows(ROTOR_CHANNEL, rotor_rows(sim_ns, omega))
+
+
+def rotor_rows(sim_ns: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """ROTOR_DTYPE rows from step end times (n,) and rotor speeds (n, 4) [rad/s]."""
+    rows = np.empty(len(sim_ns), ROTOR_DTYPE)
+    rows["sim_ns"] = sim_ns
+    rows["omega_rad_s"] = omega
+    rows["rpm"] = omega * RPM_PER_RAD_S
+    return rows
 
 
 class RotorSpool:
@@ -82,16 +98,29 @@ class RotorSpool:
         self._buf = bytearray()
         self._rows = 0
         self.rotor_rad_s = rotor_rad_s
-        self.rotor = self._rotor
+        # The bridge's hook: per step (a call) or per lockstep batch (write_rows), so a
+        # logged two-process flight keeps the bridge's C batches (bridge_loop.bind_fc_process).
+        self.rotor = self
 
-    def _rotor(self, sim_ns: int) -> None:
+    def __call__(self, sim_ns: int) -> None:
         o1, o2, o3, o4 = self.rotor_rad_s()
         k = RPM_PER_RAD_S
         self._buf += self._row.pack(sim_ns, o1, o2, o3, o4, o1 * k, o2 * k, o3 * k, o4 * k)
         self._rows += 1
         if self._rows % self.FLUSH_ROWS == 0:
-            self._fh.write(self._buf)
-            self._buf.clear()
+            self._spill()
+
+    def write_rows(self, sim_ns: np.ndarray, omega: np.ndarray) -> None:
+        """A lockstep batch's rows, the bytes __call__ would spool step by step."""
+        before = self._rows
+        self._buf.extend(rotor_rows(sim_ns, omega))
+        self._rows += len(sim_ns)
+        if self._rows // self.FLUSH_ROWS != before // self.FLUSH_ROWS:
+            self._spill()
+
+    def _spill(self) -> None:
+        self._fh.write(self._buf)
+        self._buf.clear()
 
     def event(self, sim_ns: int, kind: str, text: str, **fields) -> None:
         """The bridge's events: the FC process logs the run's events, not this spool."""

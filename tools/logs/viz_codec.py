@@ -44,13 +44,16 @@ def varint(v: int) -> bytes:
             return bytes(out)
 
 
+_V5_SHIFT = np.array([0, 7, 14, 21, 28], dtype=np.uint32)
+_V5_MORE = np.array([0x80, 0x80, 0x80, 0x80, 0], dtype=np.uint32)
+
+
 def put_varint5(dest: np.ndarray, v: np.ndarray) -> None:
     """Write each value (< 2**32) as a 5-byte varint into dest, an (n, 5) uint8 column:
-    continuation bits on the first 4 bytes whatever the value (fixed size)."""
+    continuation bits on the first 4 bytes whatever the value (fixed size). The five bytes
+    of every value in one broadcast (the last one, v >> 28, is below 0x80 unmasked)."""
     v = np.asarray(v).astype(np.uint32)
-    for i in range(4):
-        dest[:, i] = ((v >> (7 * i)) & 0x7F) | 0x80
-    dest[:, 4] = v >> 28
+    dest[...] = ((v[:, None] >> _V5_SHIFT) & 0x7F) | _V5_MORE
 
 
 # -- message descriptions: lists of items ("const", bytes) | ("f8", name) | ("v5", name) --------
@@ -123,12 +126,22 @@ class FixedMessage:
         row["op"] = OP_MESSAGE
         row["length"] = self.size - RECORD_PREFIX.size   # after opcode and length
         self._template = row
+        self._channel_rows = {}     # channel id -> the template's bytes with that id in
+
+    def _template_bytes(self, channel_id: int) -> np.ndarray:
+        row = self._channel_rows.get(channel_id)
+        if row is None:
+            row = self._template.copy()
+            row["channel"] = channel_id
+            row = self._channel_rows[channel_id] = row.view(np.uint8)
+        return row
 
     def encode(self, channel_id: int, first_seq: int, sim_ns: np.ndarray, values: dict):
         """n records: log/publish time and the stamp from sim_ns, columns from values."""
         n = len(sim_ns)
-        out = np.repeat(self._template, n)
-        out["channel"] = channel_id
+        out = np.empty(n, self.dtype)
+        # The constant bytes (channel id included) in one broadcast copy.
+        out.view(np.uint8).reshape(n, self.size)[:] = self._template_bytes(channel_id)
         out["sequence"] = np.arange(first_seq, first_seq + n, dtype=np.uint64) & 0xFFFFFFFF
         t = np.maximum(np.asarray(sim_ns, dtype=np.int64), 0)
         out["log_time"] = t
