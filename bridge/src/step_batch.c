@@ -172,8 +172,8 @@ static int fc_poll(sb_batch *b, int64_t *io)
 
 /* The batch's trace bytes not hashed yet into the bound trace hash (if any). Called right
  * after a step's publish, before the wait for the FC's answer: in two-process mode the FC
- * computes meanwhile, so the hash costs the step nothing (one process has no such wait and
- * hashes on a worker thread instead: bridge/trace_hash.py). */
+ * computes meanwhile, so the hash costs the step nothing. (One process has no such wait:
+ * it binds no hash, and Python hashes the batch's trace once, bridge/bridge_loop.py.) */
 static void hash_trace(sb_batch *b)
 {
     const size_t used = (size_t)b->ls.io[SB_IO_TRACE_BYTES];
