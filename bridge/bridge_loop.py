@@ -215,8 +215,10 @@ class BridgeLoop:
     def bind_in_process_fc(self, fc_poll_c) -> bool:
         """Let run_batch step bridge and FC together in C (`fly --processes 1` in lockstep):
         fc_poll_c is the FC's C poll over this segment (FcLoop.batch_poll). False when this
-        run cannot: an oversampled IMU (numpy per step), or a sink that logs the PWM here."""
-        if fc_poll_c is None or not self.sim.batches or self._log_pwm is not None:
+        run cannot: an oversampled IMU (numpy per step), a sink that logs the PWM here, or
+        a rotor hook that cannot take a batch's rows (`write_rows`)."""
+        if (fc_poll_c is None or not self.sim.batches or self._log_pwm is not None
+                or not self._rotor_takes_rows()):
             return False
         self._bind_batches(self.seg.c_capsule(), fc_poll_c, kernel_hashes=False)
         return True
@@ -227,15 +229,17 @@ class BridgeLoop:
         step not answered within a slice ends its batch unanswered (`fc_pending`): the
         caller looks at the FC, then waits on and collects the Python way. False when this
         run cannot: a link without a segment (HIL), an oversampled IMU, a PWM-logging sink,
-        a rotor log that takes one step at a time (tools/logs/rotor_log.py RotorSpool.rotor)."""
+        a rotor hook that cannot take a batch's rows (`write_rows`)."""
         capsule = self.seg.c_capsule()
-        if capsule is None or not self.sim.batches or self._log_pwm is not None:
-            return False
-        hook = self._log_rotor      # rows after a batch need a hook that takes rows
-        if hook is not None and not (hasattr(hook, "write_rows") or hasattr(hook, "write")):
+        if (capsule is None or not self.sim.batches or self._log_pwm is not None
+                or not self._rotor_takes_rows()):
             return False
         self._bind_batches(capsule, None)
         return True
+
+    def _rotor_takes_rows(self) -> bool:
+        """A batch hands its rotor rows to the log's hook at once (_log_rotor_rows)."""
+        return self._log_rotor is None or hasattr(self._log_rotor, "write_rows")
 
     def _bind_batches(self, capsule, fc_poll_c, kernel_hashes: bool = True) -> None:
         """The batch's buffers, bound to the kernel with the FC's C poll (None: its own
@@ -298,14 +302,11 @@ class BridgeLoop:
 
     def _log_rotor_rows(self, k0: int, done: int) -> None:
         """The rotor speeds the batch left after each of its steps k0+1.., to the log's
-        /rotor channel (tools/logs/rotor_log.py): in one call where the log takes rows."""
-        rows, dt, hook = self._rotor_rows[:done], self.sim.dt_ns, self._log_rotor
-        write_rows = getattr(hook, "write_rows", None)
-        if write_rows is not None:
-            write_rows(np.arange(k0 + 1, k0 + 1 + done, dtype=np.int64) * dt, rows)
-            return
-        for i, row in enumerate(rows.tolist()):
-            hook.write((k0 + 1 + i) * dt, row)
+        /rotor channel in one call (every rotor hook takes a batch's rows: RotorLog,
+        RotorSpool, ImuRawLog)."""
+        dt = self.sim.dt_ns
+        self._log_rotor.write_rows(np.arange(k0 + 1, k0 + 1 + done, dtype=np.int64) * dt,
+                                   self._rotor_rows[:done])
 
     def in_python_next(self) -> bool:
         """True when the next step of a batched run must take the per-step path (step_one):

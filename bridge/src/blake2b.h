@@ -2,7 +2,7 @@
  * blake2b.h - BLAKE2b (RFC 7693), unkeyed, digests of 1..64 bytes: the run's trace hash in
  * C, so that the two-process bridge can hash a step's records while it waits for the FC's
  * answer (step_batch.c) instead of after its batch. The digest is the one Python's
- * hashlib.blake2b(digest_size=n) gives for the same bytes (tests/bridge/test_trace_hash.py).
+ * hashlib.blake2b(digest_size=n) gives for the same bytes (tests/bridge/test_blake2b.py).
  * Plain C, no allocation; one user at a time.
  */
 #ifndef SB_BLAKE2B_H

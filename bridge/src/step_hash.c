@@ -2,9 +2,8 @@
  * step_hash.c - silbridge.bridge._step.Blake2b, the trace hash as a Python object around
  * blake2b.c: update(buffer), digest(), hexdigest(), as hashlib's blake2b. It lives in this
  * extension so that Kernel.run_batch can feed the same state from C (step_batch.c) while
- * Python feeds it the steps it runs itself (bridge/trace_hash.py). Like hashlib, an update
- * of 2 KiB or more releases the GIL, so a worker thread can hash while the loop steps on;
- * the object has no lock: one user at a time (TraceHasher sees to it).
+ * Python feeds it the steps it runs itself (bridge/bridge_loop.py). It keeps the GIL: the
+ * loop's thread is its only user.
  */
 #include "step_kernel.h"
 
@@ -15,15 +14,13 @@ typedef struct {
     sb_blake2b state;
 } Blake2bObject;
 
-#define SB_HASH_GIL_MIN 2048
-
 static int Blake2b_init(Blake2bObject *self, PyObject *args, PyObject *kwds)
 {
     static char *kwlist[] = {"digest_size", NULL};
     Py_ssize_t n = 16;
     if (!PyArg_ParseTupleAndKeywords(args, kwds, "|$n", kwlist, &n))
         return -1;
-    if (n < 1 || n > SB_BLAKE2B_MAX_DIGEST || sb_blake2b_init(&self->state, (size_t)n) < 0) {
+    if (sb_blake2b_init(&self->state, (size_t)n) < 0) {   /* a negative n wraps above 64 */
         PyErr_Format(PyExc_ValueError, "digest_size must be 1..%d", SB_BLAKE2B_MAX_DIGEST);
         return -1;
     }
@@ -35,13 +32,7 @@ static PyObject *Blake2b_update(Blake2bObject *self, PyObject *arg)
     Py_buffer v;
     if (PyObject_GetBuffer(arg, &v, PyBUF_C_CONTIGUOUS) < 0)
         return NULL;
-    if (v.len >= SB_HASH_GIL_MIN) {
-        Py_BEGIN_ALLOW_THREADS
-        sb_blake2b_update(&self->state, v.buf, (size_t)v.len);
-        Py_END_ALLOW_THREADS
-    } else {
-        sb_blake2b_update(&self->state, v.buf, (size_t)v.len);
-    }
+    sb_blake2b_update(&self->state, v.buf, (size_t)v.len);
     PyBuffer_Release(&v);
     Py_RETURN_NONE;
 }

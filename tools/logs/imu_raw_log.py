@@ -75,13 +75,7 @@ class ImuRawLog:
     def write_rows(self, sim_ns, omega_rows) -> None:
         """A batch's rotor rows (bridge_loop's call where a hook takes rows), then one take
         for the whole batch instead of one per step."""
-        rows = getattr(self._rotor, "write_rows", None)
-        if rows is not None:
-            rows(sim_ns, omega_rows)
-        else:
-            write = self._rotor.write
-            for t, row in zip(sim_ns.tolist(), omega_rows.tolist()):
-                write(t, row)
+        self._rotor.write_rows(sim_ns, omega_rows)
         self.take()
 
     def take(self) -> None:
