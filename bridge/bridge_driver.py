@@ -81,6 +81,7 @@ class BridgeResult:
     interrupted: str | None = None  # "SIGINT"/"SIGTERM" when a signal stopped the run early
     rates: dict = field(default_factory=dict)   # rates_summary(): achieved, late, degraded
     steps_in_c: int = 0    # steps run in C batches with the in-process FC (the rest per step)
+    steps_overlapped: int = 0  # LoopStats.steps_overlapped: published without waiting for the FC
     link: dict = field(default_factory=dict)    # link faults' records delayed / dropped
     faults: dict = field(default_factory=dict)  # per unit: switches, FAULT records ({}: none)
 
@@ -147,6 +148,7 @@ def run_bridge(sim, seg, cfg: BridgeRunConfig, *, fc_poll=None, peer_check=None,
     res.interrupted = flight.interrupted
     res.rates = rates
     res.steps_in_c = flight.steps_in_c
+    res.steps_overlapped = loop.stats.steps_overlapped
     return res
 
 

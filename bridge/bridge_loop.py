@@ -24,7 +24,7 @@ from silbridge.shm import lockstep as ls
 from silbridge.shm.records import KIND_PWM, PWM_DTYPE, RECORD_DTYPE, Kind, word_index
 
 from . import _step
-from .errors import PeerLost
+from .errors import LockstepBroken, PeerLost
 from .fault_records import FaultRecords
 from .link_faults import PWM_COMMAND, LinkFaults
 
@@ -56,6 +56,9 @@ class LoopStats:
     pwm_last_sim_ns: int = -1
     pwm_first_wall_ns: int = -1
     pwm_last_wall_ns: int = -1
+    # steps published without waiting for the FC in its own process: it promised to answer
+    # them with nothing (FC_SYNC_NS, shm/lockstep.py) and computed them meanwhile
+    steps_overlapped: int = 0
 
 
 class BridgeLoop:
@@ -224,12 +227,15 @@ class BridgeLoop:
         return True
 
     def bind_fc_process(self) -> bool:
-        """run_batch for an FC in its own process (`fly --processes 2` in lockstep): each step
-        waits in C for the FC's answer (the lockstep hand-off, shm/include/sb_handoff.h). A
-        step not answered within a slice ends its batch unanswered (`fc_pending`): the
-        caller looks at the FC, then waits on and collects the Python way. False when this
-        run cannot: a link without a segment (HIL), an oversampled IMU, a PWM-logging sink,
-        a rotor hook that cannot take a batch's rows (`write_rows`)."""
+        """run_batch for an FC in its own process (`fly --processes 2` in lockstep): a step
+        waits in C for the FC's answer (the lockstep hand-off, shm/include/sb_handoff.h)
+        where the FC's promise (FC_SYNC_NS, shm/lockstep.py) says it may answer with
+        records, and at the batch's last; the steps between are published at once and the
+        FC computes them while the bridge steps on. A step not answered within a slice ends
+        its batch unanswered (`fc_pending`): the caller looks at the FC, then waits on and
+        collects the Python way. False when this run cannot: a link without a segment
+        (HIL), an oversampled IMU, a PWM-logging sink, a rotor hook that cannot take a
+        batch's rows (`write_rows`)."""
         capsule = self.seg.c_capsule()
         if (capsule is None or not self.sim.batches or self._log_pwm is not None
                 or not self._rotor_takes_rows()):
@@ -266,7 +272,8 @@ class BridgeLoop:
                           trace=self._trace_buf, pwm=self._pwm_buf, io=self._io,
                           errors=self._err, rotor=self._rotor_rows, bridge_word=ls.BRIDGE_SIM_NS,
                           fc_word=ls.FC_SIM_NS,
-                          trace_hash=self._hash if self._kernel_hashes else None)
+                          trace_hash=self._hash if self._kernel_hashes else None,
+                          hand_on_kinds=ls.HAND_ON_KINDS if self._fc_own_process else None)
         self._io_stale = True
 
     def run_batch(self, n: int) -> int:
@@ -288,7 +295,13 @@ class BridgeLoop:
             at = w[_step.IO_OTHER_AT]
             self.fault_records.route(self._pwm_buf[at:at + w[_step.IO_OTHER_N]].copy())
             w[_step.IO_OTHER_N] = 0
+        if w[_step.IO_SYNC_BROKEN]:
+            raise LockstepBroken(f"the FC in its own process sent {w[_step.IO_SYNC_BROKEN]} PWM "
+                           "record(s) for steps it had promised to answer with none "
+                           "(FC_SYNC_NS): its motors took them late. Are the bridge and "
+                           "the FC from the same build? (`make setup` rebuilds both)")
         if done:
+            self.stats.steps_overlapped += w[_step.IO_OVERLAPPED]
             self._from_io()
             if self._rotor_rows is not None:
                 self._log_rotor_rows(k0, done)

@@ -29,5 +29,9 @@ class PeerLost(BridgeError):
     """The FC died, hung or left during a run."""
 
 
+class LockstepBroken(BridgeError):
+    """The FC answered a step it had promised to answer with nothing (FC_SYNC_NS)."""
+
+
 class StartupCheckFailed(BridgeError):
     """A start-up check of the paper's procedure (section 4.2) failed."""

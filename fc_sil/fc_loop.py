@@ -85,9 +85,15 @@ class _Series:
 
 # The loop's counters, kept by either poll (the C poll's FC_IO_*, fc_sil/ext/core_object.h);
 # _IO_TIMING.. holds the C poll's last /timing row (sim, imu wall, consume, pwm wall, period).
+# The last two are Python's inputs to the C poll's FC_SYNC_NS (shm/lockstep.py): the sim time
+# of the next poll Python follows (0: every poll), and the kinds whose polls it follows.
 (_IO_LAST_SIM_NS, _IO_LAST_K, _IO_POLLS, _IO_RECORDS, _IO_PWM_PUBLISHED, _IO_N_LATENCY,
  _IO_N_PERIOD, _IO_N_E2E, _IO_TIMING) = range(9)
-_IO_WORDS = _IO_TIMING + 5
+_IO_TIMING_END = _IO_TIMING + 5
+_IO_SYNC_UNTIL, _IO_HAND_ON_KINDS = _IO_TIMING_END, _IO_TIMING_END + 1
+_IO_WORDS = _IO_HAND_ON_KINDS + 1
+# FC_IO_SYNC_UNTIL for "no due poll" (an int64 word)
+_NEVER_NS = (1 << 63) - 1
 # With the C poll, the log's batch boundaries are cut every this many polls.
 _FLUSH_POLLS = 128
 
@@ -167,6 +173,7 @@ class FcLoop:
         """The C record router's poll over the segment, or None (records cross in Python)."""
         if capsule is None:
             return None
+        self._iow[_IO_HAND_ON_KINDS] = ls.HAND_ON_KINDS
         return self.core.attach_router(
             capsule, fc_sim_word=ls.FC_SIM_NS, latency_ns=self.latency_ns.arr,
             period_ns=self.period_ns.arr, e2e_ns=self.e2e_ns.arr, words=self._io)
@@ -250,6 +257,12 @@ class FcLoop:
                 due = t
         return due, (self._flush_in if self._flush is not None else _NO_LIMIT)
 
+    def promise_until(self, due_ns: float) -> None:
+        """The C poll's FC_SYNC_NS (shm/lockstep.py) goes no later than due_ns, the sim time
+        of the next poll Python follows; 0: every poll is followed (nothing promised), as
+        outside the serve loop, where Python runs after each poll."""
+        self._iow[_IO_SYNC_UNTIL] = _NEVER_NS if due_ns >= _NEVER_NS else max(0, math.ceil(due_ns))
+
     def after_c_polls(self, polls: int, last_n: int) -> None:
         """A caller made `polls` C polls (batch_poll) since the last call, the newest just now
         (it consumed last_n records): what _poll_c does after each, for the newest. The
@@ -276,7 +289,7 @@ class FcLoop:
             recs, pwm, status = self.buf[:n], self._pwm_out[:k], self._status_out[:k]
         if self._fc_batch is not None:
             if timing is None:
-                timing = tuple(self._iow[_IO_TIMING:_IO_WORDS])
+                timing = tuple(self._iow[_IO_TIMING:_IO_TIMING_END])
             self._fc_batch(recs, pwm, status, timing)
         if self.supervisor is not None:
             self.supervisor.after_batch(self, recs, pwm, status)
@@ -359,12 +372,6 @@ class _NeverStop:
 STOP_GRACE_S = 1.0
 
 
-# The polls Python follows besides FcLoop.python_due's: those that take a record of a kind
-# whose step `fly --processes 1` finishes in Python (the bridge kernel's F_* flags), so the
-# supervisor sees the same polls in both (AutoFlight's declination waits for a GNSS fix).
-_PYTHON_KINDS = ((1 << Kind.GNSS) | (1 << Kind.SETPOINT) | (1 << Kind.ESC)
-                 | (1 << Kind.BATTERY))
-
 def _served_in_c(loop: FcLoop):
     """serve(timeout_s) -> (polls, timed_out): in lockstep over shared memory, the FC's
     waits and C polls in one C loop (shm serve_polls), handing Python only the polls
@@ -377,8 +384,10 @@ def _served_in_c(loop: FcLoop):
 
     def serve(timeout_s: float) -> tuple[int, bool]:
         due_ns, polls_left = loop.python_due()
+        loop.promise_until(due_ns)
         polls, last_n, timed_out = serve_polls(capsule, poll, due_ns, polls_left, timeout_s,
-                                               _PYTHON_KINDS)
+                                               ls.HAND_ON_KINDS, loop.buf)
+        loop.promise_until(0)
         loop.after_c_polls(polls, last_n)
         return polls, timed_out
     return serve

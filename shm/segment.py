@@ -4,7 +4,7 @@ The bridge creates it (``Segment.create``, the owner) and the FC attaches
 (``Segment.attach``, the peer); either process may also do both, e.g. for
 fast single-process sweeps. The segment holds two rings (``sensors``: owner
 to peer, ``actuators``: peer to owner), one heartbeat counter per side,
-eight lockstep words (see shm/lockstep.py) and the per-ring counters.
+nine lockstep words (see shm/lockstep.py) and the per-ring counters.
 
 Everything per record is in C (silbridge.shm._ring); this file adds the
 class methods, the attach timeout and the context manager. The peer's side is the
@@ -24,7 +24,7 @@ __all__ = ["Segment", "Ring", "remove_stale", "monotonic_ns", "serve_polls"]
 Ring = _ring.Ring
 monotonic_ns = _ring.monotonic_ns
 # The FC process's lockstep loop in C (shm/src/serve.c; fc_sil/fc_loop.py run_fc):
-# serve_polls(segment.c_capsule(), poll, until_ns, max_polls, timeout_s, python_kinds)
+# serve_polls(segment.c_capsule(), poll, until_ns, max_polls, timeout_s, python_kinds, records)
 #   -> (polls, last_n, timed_out)
 serve_polls = _ring.serve_polls
 

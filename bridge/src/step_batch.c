@@ -13,6 +13,11 @@
  * with a trace hash bound (`trace_hash`, a _step.Blake2b) the batch hashes them itself,
  * each step's while the FC in its own process computes its answer.
  *
+ * With the FC in its own process, a step waits for its answer only where the FC's promise
+ * (FC_SYNC_NS, shm/lockstep.py; `hand_on_kinds` bound) does not cover it: the steps the FC
+ * answers with nothing are published and the next one stepped while the FC computes them.
+ * The batch's last step is always waited for, so Python finds everything answered.
+ *
  * A step whose kernel flags need Python (noise refills, a GNSS fix or setpoint due, ground
  * contact, crashes: the F_* flags above the count byte) ends the batch right after the
  * kernel ran it: io[PENDING] holds its flags, Python does its part (Simulator.step_batch:
@@ -92,16 +97,23 @@ static int take_buffers(Kernel *self, PyObject *trace, PyObject *pwm, PyObject *
 }
 
 /* bind_lockstep(segment, fc_poll, trace, pwm, io, errors, rotor, bridge_word, fc_word,
- *               trace_hash=None) */
+ *               trace_hash=None, hand_on_kinds=None) */
 PyObject *Kernel_bind_lockstep(Kernel *self, PyObject *args, PyObject *kwds)
 {
     static char *kwlist[] = {"segment", "fc_poll", "trace", "pwm", "io", "errors", "rotor",
-                             "bridge_word", "fc_word", "trace_hash", NULL};
+                             "bridge_word", "fc_word", "trace_hash", "hand_on_kinds", NULL};
     PyObject *cap, *poll, *trace, *pwm, *io, *errors, *rotor, *hash = Py_None;
+    PyObject *kinds = Py_None;
     int bw, fw;
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OOOOOOOii|O", kwlist, &cap, &poll, &trace,
-                                     &pwm, &io, &errors, &rotor, &bw, &fw, &hash))
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OOOOOOOii|OO", kwlist, &cap, &poll, &trace,
+                                     &pwm, &io, &errors, &rotor, &bw, &fw, &hash, &kinds))
         return NULL;
+    uint64_t kind_mask = 0;
+    if (kinds != Py_None) {
+        kind_mask = PyLong_AsUnsignedLongLong(kinds);
+        if (PyErr_Occurred())
+            return NULL;
+    }
     sb_blake2b *hash_state = hash == Py_None ? NULL : sb_step_hash_state(hash);
     if (hash != Py_None && hash_state == NULL)
         return NULL;
@@ -131,6 +143,10 @@ PyObject *Kernel_bind_lockstep(Kernel *self, PyObject *args, PyObject *kwds)
     b->ls.api = api;
     b->ls.bridge_word = bw;
     b->ls.fc_word = fw;
+    /* the FC's promise (FC_SYNC_NS) matters only to a bridge that waits for it */
+    b->ls.overlap = poll == Py_None && kinds != Py_None;
+    b->ls.hand_on_kinds = kind_mask;
+    sb_lockstep_forget(&b->ls);
     Py_RETURN_NONE;
 }
 
@@ -184,15 +200,23 @@ static void hash_trace(sb_batch *b)
 }
 
 /* The rest of a step the kernel has run, its `count` records in the slots: published, the
- * FC polled, the PWM collected. 1, 0 the FC did not answer, -1 error. */
-static int finish(Kernel *self, size_t count)
+ * FC polled, the PWM collected. 1, 0 the FC did not answer, -1 error. `last`: the batch
+ * ends with this step, so the FC in its own process must have answered it (Python looks). */
+static int finish(Kernel *self, size_t count, int last)
 {
     sb_lockstep *l = &self->batch.ls;
     const int64_t k = self->step_index, sim_ns = k * self->dt_ns;
     sb_lockstep_publish(l, self->slots, count, sim_ns);
     hash_trace(&self->batch);
     sb_lockstep_after_step(l, self->stage.state, k, sim_ns);
-    if (self->batch.fc_poll.obj == NULL) {
+    const int own_process = self->batch.fc_poll.obj == NULL;
+    if (own_process && !sb_lockstep_must_wait(l, self->slots, count, sim_ns, last)) {
+        /* the FC promised no answer here: it computes this step while the next is stepped */
+        sb_lockstep_skip(l, sim_ns);
+        l->io[SB_IO_DONE]++;
+        return 1;
+    }
+    if (own_process) {
         /* The FC in its own process: the lockstep hand-off (shm/include/sb_handoff.h). Not
          * answered within a slice: the step ends the batch unanswered (io FC_MISSED) and
          * Python looks at the FC, then waits on and collects (bridge_driver.py). */
@@ -208,13 +232,15 @@ static int finish(Kernel *self, size_t count)
         return -1;
     }
     sb_lockstep_collect(l);
+    if (own_process)
+        sb_lockstep_synced(l);
     l->io[SB_IO_DONE]++;
     return sb_lockstep_answered(l, sim_ns);
 }
 
 /* One lockstep step: 1 done, 0 the kernel flagged Python work (io PENDING) or the FC did
- * not answer, -1 error. */
-static int batch_step(Kernel *self)
+ * not answer, -1 error. `last`: the batch's last step. */
+static int batch_step(Kernel *self, int last)
 {
     int64_t *io = self->batch.ls.io;
     if (held_pwm(&self->batch, io) < 0)
@@ -226,7 +252,7 @@ static int batch_step(Kernel *self)
         io[SB_IO_PENDING] = flags;
         return 0;
     }
-    return finish(self, (size_t)(flags & 0xFF));
+    return finish(self, (size_t)(flags & 0xFF), last);
 }
 
 /* The batch's checks: bound, an IMU-writing kernel, an open segment. */
@@ -255,12 +281,20 @@ PyObject *Kernel_run_batch(Kernel *self, PyObject *arg)
     int64_t *io = l->io;
     io[SB_IO_TRACE_BYTES] = io[SB_IO_PENDING] = io[SB_IO_DONE] = 0;
     io[SB_IO_FC_MISSED] = io[SB_IO_POLLS] = io[SB_IO_OTHER_N] = 0;
+    io[SB_IO_OVERLAPPED] = io[SB_IO_SYNC_BROKEN] = 0;
     self->batch.hashed = 0;
-    /* A step needs room for its records and the PWM of a poll (16: many per step). */
+    /* Python may have stepped the per-step way since the last batch: no promise is held */
+    sb_lockstep_forget(l);
+    /* The steps this batch can take, known before the first (its last must be answered): a
+     * step needs room for its records and the PWM of a poll (16: many per step). */
     const size_t step_bytes = (size_t)(self->n_slots + 16) * sizeof(sb_record);
-    const Py_ssize_t rows = l->rotor != NULL ? (Py_ssize_t)l->rotor_rows : n;
-    for (Py_ssize_t k = 0; k < n && k < rows && sb_lockstep_room(l) >= step_bytes; k++) {
-        const int rc = batch_step(self);
+    Py_ssize_t steps = n;
+    if (l->rotor != NULL && (Py_ssize_t)l->rotor_rows < steps)
+        steps = (Py_ssize_t)l->rotor_rows;
+    if ((Py_ssize_t)(l->trace_len / step_bytes) < steps)
+        steps = (Py_ssize_t)(l->trace_len / step_bytes);
+    for (Py_ssize_t k = 0; k < steps && sb_lockstep_room(l) >= step_bytes; k++) {
+        const int rc = batch_step(self, k + 1 == steps);
         if (rc < 0)
             return NULL;
         if (rc == 0 || io[SB_IO_OTHER_N] != 0)     /* a FAULT for Python before the next step */
@@ -285,7 +319,7 @@ PyObject *Kernel_finish_step(Kernel *self, PyObject *arg)
         return NULL;
     }
     io[SB_IO_PENDING] = 0;
-    if (finish(self, (size_t)count) < 0)
+    if (finish(self, (size_t)count, 1) < 0)
         return NULL;
     hash_trace(&self->batch);
     return PyLong_FromLongLong(io[SB_IO_DONE]);

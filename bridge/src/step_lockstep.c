@@ -82,6 +82,45 @@ static uint64_t set_others_aside(sb_lockstep *l, sb_record *r, uint64_t n, size_
     return m;
 }
 
+int sb_lockstep_must_wait(const sb_lockstep *l, const sb_record *recs, size_t n,
+                          int64_t sim_ns, int last)
+{
+    if (!l->overlap || last || sim_ns >= l->sync_ns || l->lead >= SB_LEAD_MAX)
+        return 1;
+    for (size_t i = 0; i < n; i++) {
+        if (recs[i].h.kind < 64u && (l->hand_on_kinds >> recs[i].h.kind) & 1u)
+            return 1;
+    }
+    return 0;
+}
+
+void sb_lockstep_skip(sb_lockstep *l, int64_t sim_ns)
+{
+    l->lead++;
+    l->skipped_ns = sim_ns;
+    l->io[SB_IO_OVERLAPPED]++;
+}
+
+void sb_lockstep_synced(sb_lockstep *l)
+{
+    /* after the acquire of FC_SIM_NS that saw this answer (wait_step): its promise is
+     * visible; the FC writes the next one only after the bridge's next step */
+    l->sync_ns = (int64_t)atomic_load_explicit(sb_seg_peer_sync(l->api->seg->hdr),
+                                               memory_order_relaxed);
+    l->lead = 0;
+    l->skipped_ns = -1;
+}
+
+/* A PWM tick at or before a step the bridge did not wait for was due there: the FC's promise
+ * was wrong, and the motors took that PWM a step or more late. Counted (Python raises). */
+static void check_promise(sb_lockstep *l, const sb_record *pwm, uint64_t n)
+{
+    for (uint64_t i = 0; i < n; i++) {
+        if (pwm[i].h.sim_ns <= l->skipped_ns)
+            l->io[SB_IO_SYNC_BROKEN]++;
+    }
+}
+
 /* At most as many records as the trace has room for: a lockstep poll answers one step. */
 void sb_lockstep_collect(sb_lockstep *l)
 {
@@ -101,6 +140,8 @@ void sb_lockstep_collect(sb_lockstep *l)
         n = set_others_aside(l, pwm, n, l->pwm_cap);
     if (n == 0)
         return;
+    if (l->skipped_ns >= 0)
+        check_promise(l, pwm, n);
     const sb_record *last = &pwm[n - 1];
     for (int i = 0; i < 4; i++)
         io[SB_IO_PWM_US + i] = last->u.pwm.pwm_us[i];

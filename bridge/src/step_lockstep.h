@@ -38,8 +38,16 @@ enum {
     SB_IO_ERR_N = 18,         /*   samples taken (BridgeLoop._n_err) */
     SB_IO_OTHER_AT = 19,      /* the last collection's non-PWM records (FAULT): first slot */
     SB_IO_OTHER_N = 20,       /*   and count, in the pwm buffer; nonzero ends the batch */
-    SB_IO_WORDS = 21
+    SB_IO_OVERLAPPED = 21,    /* steps published without waiting for the FC (FC_SYNC_NS) */
+    SB_IO_SYNC_BROKEN = 22,   /* PWM records the FC emitted for a step it had promised to
+                               * answer with none (its FC_SYNC_NS was wrong: an error) */
+    SB_IO_WORDS = 23
 };
+
+/* The most steps the bridge publishes without waiting for the FC, whatever it promised: a
+ * dozen PWM periods, a small share of the sensor ring (32 steps of ~6 records against the
+ * 16384 slots of Segment.create's default; a full ring refuses records). */
+#define SB_LEAD_MAX 32
 
 /* The summary errors' sums and what they are taken against (BridgeLoop._sample_errors),
  * float64 slots of the `errors` buffer. */
@@ -64,6 +72,13 @@ typedef struct {
     double *errors;           /* float64[SB_ERR_COUNT] */
     double *rotor;            /* float64 (rotor_rows, 4) rotor speeds per step [rad/s], or NULL */
     size_t rotor_rows;
+    /* The FC in its own process: the steps it promised to answer with nothing (FC_SYNC_NS,
+     * shm/lockstep.py) are published without a wait. */
+    int overlap;              /* 1: take the FC's promise; 0: wait for every step */
+    uint64_t hand_on_kinds;   /* a step carrying one of these sb_kind bits is waited for */
+    int64_t sync_ns;          /* FC_SYNC_NS read after the last wait (0: wait) */
+    int64_t lead;             /* steps published since the last wait */
+    int64_t skipped_ns;       /* the newest of them (-1: none) */
 } sb_lockstep;
 
 /* Step k's n records: to the trace and the sensor ring, then the step word, one doorbell. */
@@ -76,6 +91,27 @@ void sb_lockstep_after_step(sb_lockstep *l, const double *state, int64_t k, int6
 /* BridgeLoop.collect_pwm: the actuator ring drained, the newest PWM held, the stamps
  * counted, the records traced with wall_ns zeroed. */
 void sb_lockstep_collect(sb_lockstep *l);
+
+/* Must the bridge wait for the FC's answer to this step (sim_ns, its n records)? Without
+ * overlap, always; with it, at the step the FC's promise names or later, at a step carrying
+ * a hand-on kind, at the batch's `last` step and after SB_LEAD_MAX steps unwaited. */
+int sb_lockstep_must_wait(const sb_lockstep *l, const sb_record *recs, size_t n,
+                          int64_t sim_ns, int last);
+
+/* A step published without a wait. */
+void sb_lockstep_skip(sb_lockstep *l, int64_t sim_ns);
+
+/* After a wait the FC answered: its new promise read (and, after sb_lockstep_collect, the
+ * check that nothing it emitted was due at a step the bridge did not wait for). */
+void sb_lockstep_synced(sb_lockstep *l);
+
+/* No promise held (a new batch: Python may have stepped the per-step way meanwhile). */
+static inline void sb_lockstep_forget(sb_lockstep *l)
+{
+    l->sync_ns = 0;
+    l->lead = 0;
+    l->skipped_ns = -1;
+}
 
 /* 1 when the FC has answered through sim_ns (FC_SIM_NS), else 0 and io[FC_MISSED] set. */
 int sb_lockstep_answered(sb_lockstep *l, int64_t sim_ns);

@@ -37,7 +37,12 @@ enum {
     FC_IO_N_E2E,
     FC_IO_TIMING,          /* 5 words: the last poll's /timing row (sim, imu wall, consume,
                             * pwm wall, period [ns]), for a per-cycle sink (fc_loop.py) */
-    FC_IO_WORDS = FC_IO_TIMING + 5
+    /* Written by Python: FC_SYNC_NS's two inputs (sb_segment.h sb_seg_peer_sync). */
+    FC_IO_SYNC_UNTIL = FC_IO_TIMING + 5, /* the sim time of the first poll Python follows
+                            * (FcLoop.python_due; 0 outside the serve loop: every poll) */
+    FC_IO_HAND_ON_KINDS,   /* a bitmask of sb_kind: a poll taking one is followed by Python
+                            * (shm/lockstep.py HAND_ON_KINDS) */
+    FC_IO_WORDS
 };
 
 typedef struct fc_io_t {

@@ -114,6 +114,26 @@ static inline void series_add(fc_io_t *io, int i, int64_t v)
     (*n)++;
 }
 
+/* FC_SYNC_NS with this poll's answer (sb_segment.h sb_seg_peer_sync): the sim time of the
+ * next step the bridge must wait for. The core emits nothing before its next PWM tick
+ * (fc_core_pwm_due: at the first IMU sample at or after it), and Python acts at its due poll
+ * (FC_IO_SYNC_UNTIL) and after a poll that took a record of FC_IO_HAND_ON_KINDS: that one
+ * promises nothing (0), for Python may change the core or send FAULT records before the next
+ * poll. Before the first IMU sample there is no tick yet: 0. */
+static uint64_t next_sync(const CoreObject *self, const sb_record *recs, uint64_t n)
+{
+    const int64_t *w = self->io.words;
+    const uint64_t kinds = (uint64_t)w[FC_IO_HAND_ON_KINDS];
+    for (uint64_t i = 0; i < n; i++) {
+        if (recs[i].h.kind < 64u && (kinds >> recs[i].h.kind) & 1u)
+            return 0;
+    }
+    const fc_core_t *c = &self->core;
+    const int64_t tick = c->have_imu ? c->next_pwm_ns : 0;
+    const int64_t sync = w[FC_IO_SYNC_UNTIL] < tick ? w[FC_IO_SYNC_UNTIL] : tick;
+    return sync > 0 ? (uint64_t)sync : 0;
+}
+
 static PyObject *Core_poll_io(CoreObject *self, PyObject *Py_UNUSED(unused))
 {
     fc_io_t *io = &self->io;
@@ -148,6 +168,9 @@ static PyObject *Core_poll_io(CoreObject *self, PyObject *Py_UNUSED(unused))
     }
     if (newest->flags & SB_FLAG_STEP_END) {
         io->words[FC_IO_LAST_SIM_NS] = newest->sim_ns;
+        /* the promise first: the step word's release publishes it with the answer */
+        atomic_store_explicit(sb_seg_peer_sync(io->api->seg->hdr), next_sync(self, recs, n),
+                              memory_order_relaxed);
         atomic_store_explicit(sb_capi_word(io->api, io->fc_sim_word), (uint64_t)newest->sim_ns,
                               memory_order_release);
     }

@@ -3,7 +3,7 @@
  * lives in shared memory and is used from two processes.
  *
  * Ownership rule (who writes what):
- *   producer: the slots, ctl->head, ctl->rejected, ctl->step_word
+ *   producer: the slots, ctl->head, ctl->rejected, ctl->step_word, ctl->sync_word
  *   consumer: ctl->tail, ctl->overwritten
  *   segment owner, once, before the segment is published: the config line
  * Each side keeps its own index and a cached copy of the other's in its
@@ -64,7 +64,11 @@ typedef struct sb_ring_ctl {
      * BRIDGE_SIM_NS, the actuator ring's FC_SIM_NS), on the head's line: a lockstep
      * hand-off (records, then the word) moves this one line and the records' slots. */
     _Atomic uint64_t step_word;
-    uint8_t pad1[SB_CACHE_LINE - 24];
+    /* The producer's next sync (sb_segment.h sb_seg_peer_sync: the actuator ring's is the
+     * FC's FC_SYNC_NS; the sensor ring's is unused), stored before step_word, on its line:
+     * the waiter reads both with the one line it moves. */
+    _Atomic uint64_t sync_word;
+    uint8_t pad1[SB_CACHE_LINE - 32];
     /* Line 2: written by the consumer only. */
     _Alignas(SB_CACHE_LINE) _Atomic uint64_t tail; /* records popped or skipped */
     _Atomic uint64_t overwritten;                  /* records skipped because they were lapped */
@@ -79,6 +83,9 @@ _Static_assert(offsetof(sb_ring_ctl, tail) == 2 * SB_CACHE_LINE, "tail on its ow
 _Static_assert(offsetof(sb_ring_ctl, step_word) / SB_CACHE_LINE ==
                    offsetof(sb_ring_ctl, head) / SB_CACHE_LINE,
                "the producer's lockstep word shares the head's line");
+_Static_assert(offsetof(sb_ring_ctl, sync_word) / SB_CACHE_LINE ==
+                   offsetof(sb_ring_ctl, head) / SB_CACHE_LINE,
+               "the producer's sync word shares the head's line");
 
 /* Process-local view of one ring. Producer fields and consumer fields are
  * used by the side that plays that role; both are loaded from shared memory

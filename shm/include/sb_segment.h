@@ -29,8 +29,10 @@
 #include "sb_ring.h"
 
 #define SB_SEG_MAGIC 0x314D485342494C53ull /* "SLIBSHM1" read little-endian */
-#define SB_SEG_VERSION 3u /* 2: doorbells and the owner tag; 3: step words on the ring lines, hand-off */
-#define SB_SEG_WORDS 8u
+#define SB_SEG_VERSION 4u /* 2: doorbells and the owner tag; 3: step words on the ring lines,
+                             hand-off; 4: the FC's sync word (FC_SYNC_NS) */
+#define SB_SEG_WORDS 9u       /* lockstep word indices (shm/lockstep.py) */
+#define SB_SEG_WORD_LINES 8u  /* header lines holding them: 0, 1 and 8 live on the rings' lines */
 #define SB_SEG_HEADER_BYTES 4096u
 #define SB_SEG_NAME_MAX 64u
 #define SB_SEG_PREFIX "/silbridge-"
@@ -39,13 +41,15 @@
 
 enum sb_seg_ring { SB_RING_SENSORS = 0, SB_RING_ACTUATORS = 1, SB_RING_COUNT = 2 };
 
-/* The lockstep words the C side reads (shm/lockstep.py names all eight; tests/shm/
- * test_handoff.py checks these agree): each side's step word, the run mode, STOP. */
+/* The lockstep words the C side reads (shm/lockstep.py names all nine; tests/shm/
+ * test_handoff.py checks these agree): each side's step word, the run mode, STOP, the FC's
+ * promise. */
 enum sb_seg_word_index {
     SB_WORD_OWNER_STEP = 0, /* BRIDGE_SIM_NS: on the sensor ring's producer line */
     SB_WORD_PEER_STEP = 1,  /* FC_SIM_NS: on the actuator ring's producer line */
     SB_WORD_RUN_MODE = 2,
-    SB_WORD_STOP = 3
+    SB_WORD_STOP = 3,
+    SB_WORD_PEER_SYNC = 8   /* FC_SYNC_NS: beside FC_SIM_NS (sb_seg_peer_sync) */
 };
 enum { SB_MODE_LOCKSTEP = 1 }; /* RUN_MODE value: the hand-off waits of sb_handoff.h apply */
 
@@ -97,10 +101,11 @@ typedef struct sb_seg_header {
     _Atomic uint64_t peer_trouble;  /* the peer's hand-off spins that ran out or lost their core */
     uint32_t pad2[8];
     /* Lines 3..10: lockstep words, one per line so their writers never share; use
-     * sb_seg_word(): words[0] and words[1] are unused, those two live on the rings' lines. */
+     * sb_seg_word(): words[0] and words[1] are unused, those two (and word 8, FC_SYNC_NS)
+     * live on the rings' lines. */
     struct {
         _Alignas(SB_CACHE_LINE) _Atomic uint64_t value;
-    } words[SB_SEG_WORDS];
+    } words[SB_SEG_WORD_LINES];
     /* Lines 11..16: ring control blocks. */
     sb_ring_ctl rings[SB_RING_COUNT];
     /* Lines 17, 18: doorbells (sb_doorbell.h): [SB_BELL_OWNER] rung by the owner. */
@@ -168,12 +173,25 @@ typedef struct sb_seg_probe {
 } sb_seg_probe;
 int sb_segment_probe(const char *name, sb_seg_probe *out, sb_seg_diag *diag);
 
-/* Lockstep word i (0..SB_SEG_WORDS-1): the two step words sit beside the heads of the rings
- * their writers produce, so a hand-off moves one line besides the records (sb_ring.h). */
+/* FC_SYNC_NS, the FC's promise beside its step word (shm/lockstep.py): the sim time of the
+ * next step whose answer the bridge must wait for. Every step before it the FC answers with
+ * no record, and its Python does not act, so the bridge publishes them without waiting and the
+ * FC computes while the bridge steps its physics. 0 (a new segment, an FC that makes no
+ * promise): the bridge waits for every step. Stored before FC_SIM_NS (whose release orders
+ * it), read after the acquire that saw it. */
+static inline _Atomic uint64_t *sb_seg_peer_sync(sb_seg_header *h)
+{
+    return &h->rings[SB_RING_ACTUATORS].sync_word;
+}
+
+/* Lockstep word i (0..SB_SEG_WORDS-1): the two step words (and the FC's promise) sit beside
+ * the heads of the rings their writers produce, so a hand-off moves one line besides the
+ * records (sb_ring.h). */
 static inline _Atomic uint64_t *sb_seg_word(sb_seg_header *h, unsigned i)
 {
     if (i == SB_WORD_OWNER_STEP) return &h->rings[SB_RING_SENSORS].step_word;
     if (i == SB_WORD_PEER_STEP) return &h->rings[SB_RING_ACTUATORS].step_word;
+    if (i == SB_WORD_PEER_SYNC) return sb_seg_peer_sync(h);
     return &h->words[i].value;
 }
 

@@ -157,8 +157,10 @@ static PyObject *mod_layout(PyObject *Py_UNUSED(m), PyObject *Py_UNUSED(a))
 static PyObject *mod_lockstep_layout(PyObject *Py_UNUSED(m), PyObject *Py_UNUSED(a))
 {
     return Py_BuildValue(
-        "{snsnsnsnsnsnsn}", "owner_step_word", (Py_ssize_t)SB_WORD_OWNER_STEP,
-        "peer_step_word", (Py_ssize_t)SB_WORD_PEER_STEP, "run_mode_word",
+        "{snsnsnsnsnsnsnsnsn}", "owner_step_word", (Py_ssize_t)SB_WORD_OWNER_STEP,
+        "peer_step_word", (Py_ssize_t)SB_WORD_PEER_STEP, "peer_sync_word",
+        (Py_ssize_t)SB_WORD_PEER_SYNC, "ring_sync_word", (Py_ssize_t)offsetof(sb_ring_ctl, sync_word),
+        "run_mode_word",
         (Py_ssize_t)SB_WORD_RUN_MODE, "stop_word", (Py_ssize_t)SB_WORD_STOP, "mode_lockstep",
         (Py_ssize_t)SB_MODE_LOCKSTEP, "ring_step_word", (Py_ssize_t)offsetof(sb_ring_ctl, step_word),
         "seg_handoff_arm", (Py_ssize_t)offsetof(sb_seg_header, handoff_arm));
@@ -179,11 +181,12 @@ static PyMethodDef module_methods[] = {
     {"remove_stale", mod_remove_stale, METH_O,
      "remove_stale(name) -> bool: remove the segment if its owner is gone"},
     {"serve_polls", (PyCFunction)(void (*)(void))sb_serve_polls, METH_FASTCALL,
-     "serve_polls(capsule, poll, until_ns, max_polls, timeout_s, python_kinds) -> (polls, "
-     "last_n, timed_out): the FC's lockstep loop (shm/src/serve.c): wait for the bridge's "
-     "records (the hand-off), call poll(), until the FC's step word reaches until_ns (int, or "
-     "float inf), a poll took a record whose kind is in the bitmask python_kinds, max_polls "
-     "polls that consumed records, STOP, or timeout_s; timed_out: the last wait saw no record."},
+     "serve_polls(capsule, poll, until_ns, max_polls, timeout_s, python_kinds, records) -> "
+     "(polls, last_n, timed_out): the FC's lockstep loop (shm/src/serve.c): wait for the "
+     "bridge's records (the hand-off), call poll(), until the FC's step word reaches until_ns "
+     "(int, or float inf), a poll took a record whose kind is in the bitmask python_kinds "
+     "(read from `records`, the array of 64-byte records poll() pops into), max_polls polls "
+     "that consumed records, STOP, or timeout_s; timed_out: the last wait saw no record."},
     {"c_stream_bench", (PyCFunction)(void (*)(void))sb_bench_stream,
      METH_VARARGS | METH_KEYWORDS,
      "c_stream_bench(ring, seconds, batch=64, idle_timeout_s=10.0, max_records=0) -> dict: C "

@@ -74,7 +74,8 @@ uint64_t sb_layout_hash(void)
         offsetof(sb_seg_header, rings), SB_SEG_TAG_MAX, sizeof(sb_doorbell),
         offsetof(sb_seg_header, bells), offsetof(sb_doorbell, seq),
         offsetof(sb_doorbell, waiters), offsetof(sb_seg_header, owner_tag),
-        offsetof(sb_ring_ctl, step_word), offsetof(sb_seg_header, peer_trouble),
+        offsetof(sb_ring_ctl, step_word), offsetof(sb_ring_ctl, sync_word),
+        offsetof(sb_seg_header, peer_trouble),
         offsetof(sb_seg_header, handoff_arm), SB_WORD_OWNER_STEP, SB_WORD_PEER_STEP,
     };
     uint64_t h = 14695981039346656037ull;

@@ -7,9 +7,11 @@
  * time of the first step whose poll Python must follow, and how many polls the log
  * allows), or the poll consumes a record of a kind Python must see (`python_kinds`, a
  * bitmask of sb_kind: the kinds whose steps `fly --processes 1` finishes in Python). The
- * kinds are read from the ring before the poll pops them: in lockstep nothing else is
- * published until the FC has answered, so what it reads is exactly what the poll takes. A Python loop around the same wait and poll costs ~3-5 us of interpreter a
- * step, which at ~100x real time is a third of the step.
+ * kinds are read from what the poll took (`records`, the array it pops into): the bridge
+ * may publish the steps the FC promised to answer with nothing without waiting
+ * (FC_SYNC_NS, shm/lockstep.py), so the ring can hold more by the time the poll pops than
+ * it did a moment before. A Python loop around the same wait and poll costs ~3-5 us of
+ * interpreter a step, which at ~100x real time is a third of the step.
  */
 #include "module.h"
 
@@ -34,24 +36,27 @@ static void beat(sb_seg_header *h)
     atomic_store_explicit(&h->peer_heartbeat, v, memory_order_release);
 }
 
-/* Does a waiting record (local tail .. head) have a kind in mask? */
-static int waiting_kinds_in(const sb_ring *r, uint64_t mask)
+/* Does one of the first n records the poll took (`v`, 64-byte records) have a kind in mask? */
+static int took_kinds_in(const Py_buffer *v, long long n, uint64_t mask)
 {
-    uint64_t head = atomic_load_explicit(&r->ctl->head, memory_order_acquire);
-    for (uint64_t i = r->tail; i != head; ++i) {
-        uint16_t kind = r->slots[i & r->mask].h.kind;
+    const sb_record *r = v->buf;
+    const long long cap = (long long)(v->len / (Py_ssize_t)sizeof *r);
+    for (long long i = 0; i < n && i < cap; ++i) {
+        uint16_t kind = r[i].h.kind;
         if (kind < 64u && (mask >> kind) & 1u) return 1;
     }
     return 0;
 }
 
-/* serve_polls(capsule, poll, until_ns, max_polls, timeout_s, python_kinds)
+static PyObject *serve(SegmentObject *self, PyObject *const *args, const Py_buffer *took);
+
+/* serve_polls(capsule, poll, until_ns, max_polls, timeout_s, python_kinds, records)
  *   -> (polls, last_n, timed_out) */
 PyObject *sb_serve_polls(PyObject *Py_UNUSED(module), PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 6) {
+    if (nargs != 7) {
         PyErr_SetString(PyExc_TypeError, "serve_polls(capsule, poll, until_ns, max_polls, "
-                                         "timeout_s, python_kinds)");
+                                         "timeout_s, python_kinds, records)");
         return NULL;
     }
     const sb_capi *api = PyCapsule_GetPointer(args[0], SB_CAPI_CAPSULE);
@@ -63,6 +68,22 @@ PyObject *sb_serve_polls(PyObject *Py_UNUSED(module), PyObject *const *args, Py_
                                      "poll callable");
         return NULL;
     }
+    Py_buffer took;
+    if (PyObject_GetBuffer(args[6], &took, PyBUF_C_CONTIGUOUS) < 0) return NULL;
+    if (took.len % (Py_ssize_t)sizeof(sb_record) != 0) {
+        PyBuffer_Release(&took);
+        PyErr_SetString(PyExc_ValueError, "serve_polls: records must be the poll's array of "
+                                          "64-byte records");
+        return NULL;
+    }
+    PyObject *r = serve(self, args, &took);
+    PyBuffer_Release(&took);
+    return r;
+}
+
+/* The loop itself, once the arguments are checked; `took`: where the poll puts its records. */
+static PyObject *serve(SegmentObject *self, PyObject *const *args, const Py_buffer *took)
+{
     int64_t until;
     if (until_ns(args[2], &until) < 0) return NULL;
     Py_ssize_t max_polls = PyLong_AsSsize_t(args[3]);
@@ -82,7 +103,6 @@ PyObject *sb_serve_polls(PyObject *Py_UNUSED(module), PyObject *const *args, Py_
             timed_out = 1;
             break;
         }
-        int hand_on = waiting_kinds_in(&api->rings[SB_RING_SENSORS], python_kinds);
         PyObject *r = PyObject_CallNoArgs(args[1]);
         if (r == NULL) return NULL;
         long long n = PyLong_AsLongLong(r);
@@ -92,7 +112,8 @@ PyObject *sb_serve_polls(PyObject *Py_UNUSED(module), PyObject *const *args, Py_
             polls++;
             last_n = n;
             beat(h);
-            if (hand_on || (int64_t)atomic_load_explicit(acked, memory_order_relaxed) >= until)
+            if (took_kinds_in(took, n, python_kinds) ||
+                (int64_t)atomic_load_explicit(acked, memory_order_relaxed) >= until)
                 break;
         }
         if (PyErr_CheckSignals() < 0) return NULL;

@@ -55,7 +55,7 @@ def poll():
 cap = seg.c_capsule()
 polls = 0
 while not seg.word(ls.STOP):
-    polls += serve_polls(cap, poll, float("inf"), 1 << 30, 0.5, 0)[0]
+    polls += serve_polls(cap, poll, float("inf"), 1 << 30, 0.5, 0, buf)[0]
 print(json.dumps({"polls": polls, "stats": seg.handoff_stats()}), flush=True)
 seg.close()
 """
@@ -132,16 +132,20 @@ def test_lockstep_word_numbers_and_lines_agree_with_lockstep_py():
     assert lay["peer_step_word"] == ls.FC_SIM_NS
     assert lay["run_mode_word"] == ls.RUN_MODE and lay["stop_word"] == ls.STOP
     assert lay["mode_lockstep"] == ls.MODE_LOCKSTEP
+    assert lay["peer_sync_word"] == ls.FC_SYNC_NS
     assert lay["ring_step_word"] // 64 == seg["ring_head"] // 64     # one line per hand-off
+    assert lay["ring_sync_word"] // 64 == seg["ring_head"] // 64     # the promise rides along
     assert lay["seg_handoff_arm"] % 64 == 0
 
 
 def test_step_words_live_beside_the_ring_heads(name):
     # Segment.word / set_word and the C side's word pointer agree for every index.
     with Segment.create(name) as seg:
-        for i in range(8):
+        for i in range(9):
             seg.set_word(i, 1000 + i)
-        assert [seg.word(i) for i in range(8)] == [1000 + i for i in range(8)]
+        assert [seg.word(i) for i in range(9)] == [1000 + i for i in range(9)]
+        with pytest.raises(Exception):
+            seg.word(9)
 
 
 def _fly(processes: int, log: str) -> dict:

@@ -126,7 +126,7 @@ def test_extension_segment_layout():
     assert lay["sizeof_ring_ctl"] == 192
     assert lay["ring_head"] == 64 and lay["ring_tail"] == 128  # each index on its own line
     assert lay["seg_owner_line"] == 64 and lay["seg_peer_line"] == 128
-    assert lay["seg_words"] == 192 and lay["words"] == 8
+    assert lay["seg_words"] == 192 and lay["words"] == 9     # FC_SYNC_NS: the ninth
     assert lay["sizeof_seg_header"] <= lay["header_bytes"] == 4096
     assert lay["records_version"] == RECORDS_VERSION
 

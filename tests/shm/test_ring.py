@@ -199,7 +199,7 @@ def test_words_wait_and_heartbeats(pair):
     assert peer.word(3) == 2**64 - 1
     assert not peer.wait_word(0, 5, 0.01)
     with pytest.raises(IndexError):
-        owner.word(8)
+        owner.word(9)
 
     def later():
         time.sleep(0.02)

@@ -29,3 +29,14 @@ def test_two_process_batches_are_long(tmp_path, monkeypatch, logged):
     # The first window's checks and the end cut some; the rest run at the batch limit.
     assert statistics.median(asked) == BATCH_MAX_STEPS
     assert sum(asked) >= 2_900      # ~3,000 steps, nearly all in C
+
+
+def test_two_processes_overlap_the_steps_the_fc_answers_with_nothing():
+    """The FC promises its next PWM tick (FC_SYNC_NS): at 400 Hz PWM and 1 kHz physics the
+    bridge publishes about 3 steps in 5 without waiting, and the flight is the same."""
+    opts = flight.FlightOptions(scenario="S2", duration_s=3.0)
+    two = flight.fly_two_processes(opts, out=lambda s: None)
+    one = flight.fly_one_process(opts, out=lambda s: None)
+    assert two["trace_hash"] == one["trace_hash"]
+    assert one["steps_overlapped"] == 0
+    assert 0.5 * 3_000 < two["steps_overlapped"] <= 0.6 * 3_000

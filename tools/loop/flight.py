@@ -384,6 +384,9 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         # CPU seconds of the bridge's loop thread (with --processes 1 the FC's too): the
         # speed figure that other processes on the machine do not inflate.
         "loop_cpu_s": res.cpu_s,
+        # Steps the bridge published without waiting for an FC in its own process, which
+        # had promised to answer them with nothing (shm/lockstep.py FC_SYNC_NS).
+        "steps_overlapped": res.steps_overlapped,
         "rates_hz": rates,
         "overwritten": overwritten,
         "rejected": rejected,
