@@ -296,10 +296,11 @@ class BridgeLoop:
             self.fault_records.route(self._pwm_buf[at:at + w[_step.IO_OTHER_N]].copy())
             w[_step.IO_OTHER_N] = 0
         if w[_step.IO_SYNC_BROKEN]:
-            raise LockstepBroken(f"the FC in its own process sent {w[_step.IO_SYNC_BROKEN]} PWM "
-                           "record(s) for steps it had promised to answer with none "
-                           "(FC_SYNC_NS): its motors took them late. Are the bridge and "
-                           "the FC from the same build? (`make setup` rebuilds both)")
+            raise LockstepBroken(
+                f"the FC in its own process sent {w[_step.IO_SYNC_BROKEN]} PWM record(s) for "
+                "steps it had promised to answer with none (FC_SYNC_NS): its motors took them "
+                "late. Are the bridge and the FC from the same build? (`make setup` rebuilds "
+                "both)")
         if done:
             self.stats.steps_overlapped += w[_step.IO_OVERLAPPED]
             self._from_io()

@@ -15,12 +15,12 @@ Sim time (not a step counter) is the currency so the FC need not know dt.
 The FC may promise more (FC_SYNC_NS, stored before FC_SIM_NS on the same line): with each
 answer, the sim time of the next step whose answer the bridge must wait for, its next PWM
 tick or its Python's next due poll. Every step before it the FC answers with no record, and
-its Python does not act, so the bridge's batch
-(bridge/src/step_batch.c) publishes those steps without waiting and the FC computes them
-while the bridge steps on: the same records, PWM and trace, one hand-off where there were
-two or three. The bridge still waits at a step carrying a record of HAND_ON_KINDS (the FC's
-Python follows that poll), at the last step of a batch, and at least every few steps; a
-promise of 0 (an FC polling from Python, after a poll its Python follows) means every step.
+its Python does not act, so the bridge's batch (bridge/src/step_batch.c) publishes those
+steps without waiting and the FC computes them while the bridge steps on: the same records,
+PWM and trace, one hand-off where there were two or three. The bridge still waits at a step
+carrying a record of HAND_ON_KINDS (the FC's Python follows that poll), at the last step of a
+batch, and at least every 32 steps; a promise of 0 (an FC polling from Python, or after a
+poll its Python follows) means every step.
 """
 
 from silbridge.shm.records import Kind

@@ -32,7 +32,8 @@
 #define SB_SEG_VERSION 4u /* 2: doorbells and the owner tag; 3: step words on the ring lines,
                              hand-off; 4: the FC's sync word (FC_SYNC_NS) */
 #define SB_SEG_WORDS 9u       /* lockstep word indices (shm/lockstep.py) */
-#define SB_SEG_WORD_LINES 8u  /* header lines holding them: 0, 1 and 8 live on the rings' lines */
+#define SB_SEG_WORD_LINES 8u  /* header lines for words[]: one per index below 8; 0, 1 (unused
+                                 there) and 8 live on the rings' lines */
 #define SB_SEG_HEADER_BYTES 4096u
 #define SB_SEG_NAME_MAX 64u
 #define SB_SEG_PREFIX "/silbridge-"
