@@ -85,13 +85,8 @@ static uint64_t set_others_aside(sb_lockstep *l, sb_record *r, uint64_t n, size_
 int sb_lockstep_must_wait(const sb_lockstep *l, const sb_record *recs, size_t n,
                           int64_t sim_ns, int last)
 {
-    if (!l->overlap || last || sim_ns >= l->sync_ns || l->lead >= SB_LEAD_MAX)
-        return 1;
-    for (size_t i = 0; i < n; i++) {
-        if (recs[i].h.kind < 64u && (l->hand_on_kinds >> recs[i].h.kind) & 1u)
-            return 1;
-    }
-    return 0;
+    return !l->overlap || last || sim_ns >= l->sync_ns || l->lead >= SB_LEAD_MAX ||
+           sb_records_any_kind(recs, n, l->hand_on_kinds);
 }
 
 void sb_lockstep_skip(sb_lockstep *l, int64_t sim_ns)

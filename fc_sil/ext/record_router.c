@@ -123,15 +123,13 @@ static inline void series_add(fc_io_t *io, int i, int64_t v)
 static uint64_t next_sync(const CoreObject *self, const sb_record *recs, uint64_t n)
 {
     const int64_t *w = self->io.words;
-    const uint64_t kinds = (uint64_t)w[FC_IO_HAND_ON_KINDS];
-    for (uint64_t i = 0; i < n; i++) {
-        if (recs[i].h.kind < 64u && (kinds >> recs[i].h.kind) & 1u)
-            return 0;
-    }
     const fc_core_t *c = &self->core;
     const int64_t tick = c->have_imu ? c->next_pwm_ns : 0;
     const int64_t sync = w[FC_IO_SYNC_UNTIL] < tick ? w[FC_IO_SYNC_UNTIL] : tick;
-    return sync > 0 ? (uint64_t)sync : 0;
+    /* 0 already (outside the serve loop, `fly --processes 1`): no kinds to look at */
+    if (sync <= 0 || sb_records_any_kind(recs, n, (uint64_t)w[FC_IO_HAND_ON_KINDS]))
+        return 0;
+    return (uint64_t)sync;
 }
 
 static PyObject *Core_poll_io(CoreObject *self, PyObject *Py_UNUSED(unused))

@@ -197,4 +197,16 @@ SB_STATIC_ASSERT(sizeof(sb_battery) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_fault) == 40, "payload must be 40 bytes");
 SB_STATIC_ASSERT(sizeof(sb_record) == SB_RECORD_SIZE, "a record is one 64-byte slot");
 
+/* Does one of the n records have a kind in mask (bit k: kind k)? The lockstep's hand-on
+ * kinds (shm/lockstep.py HAND_ON_KINDS), checked by the bridge, the FC's poll and its serve
+ * loop. */
+static inline int sb_records_any_kind(const sb_record *r, uint64_t n, uint64_t mask)
+{
+    for (uint64_t i = 0; i < n; i++) {
+        if (r[i].h.kind < 64u && ((mask >> r[i].h.kind) & 1u))
+            return 1;
+    }
+    return 0;
+}
+
 #endif /* SB_RECORDS_H */

@@ -39,13 +39,8 @@ static void beat(sb_seg_header *h)
 /* Does one of the first n records the poll took (`v`, 64-byte records) have a kind in mask? */
 static int took_kinds_in(const Py_buffer *v, long long n, uint64_t mask)
 {
-    const sb_record *r = v->buf;
-    const long long cap = (long long)(v->len / (Py_ssize_t)sizeof *r);
-    for (long long i = 0; i < n && i < cap; ++i) {
-        uint16_t kind = r[i].h.kind;
-        if (kind < 64u && (mask >> kind) & 1u) return 1;
-    }
-    return 0;
+    const long long cap = (long long)(v->len / (Py_ssize_t)sizeof(sb_record));
+    return n > 0 && sb_records_any_kind(v->buf, (uint64_t)(n < cap ? n : cap), mask);
 }
 
 static PyObject *serve(SegmentObject *self, PyObject *const *args, const Py_buffer *took);
