@@ -216,6 +216,7 @@ static int finish(Kernel *self, size_t count, int last)
         l->io[SB_IO_DONE]++;
         return 1;
     }
+    sb_lockstep_ring(l);
     if (own_process) {
         /* The FC in its own process: the lockstep hand-off (shm/include/sb_handoff.h). Not
          * answered within a slice: the step ends the batch unanswered (io FC_MISSED) and

@@ -84,6 +84,9 @@ typedef struct {
 /* Step k's n records: to the trace and the sensor ring, then the step word, one doorbell. */
 void sb_lockstep_publish(sb_lockstep *l, const sb_record *recs, size_t n, int64_t sim_ns);
 
+/* Wake the FC if it sleeps on the segment's doorbell: before the bridge waits for it. */
+void sb_lockstep_ring(sb_lockstep *l);
+
 /* After step k's publish: the summary errors' sample (every io[ERR_EVERY]-th step from
  * io[ERR_FROM_NS]) and the rotor speeds' row, from the stage's state (ST_* slots). */
 void sb_lockstep_after_step(sb_lockstep *l, const double *state, int64_t k, int64_t sim_ns);

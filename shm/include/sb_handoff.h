@@ -20,11 +20,16 @@
 
 #include "sb_doorbell.h"
 #include "sb_handoff_choice.h"
+#include "sb_pin.h"
 #include "sb_wait.h"
 
-/* A spin's clock readings more than this apart: the thread was off its core meanwhile. */
-#define SB_HANDOFF_GAP_NS 20000
-/* SILBRIDGE_HANDOFF=spin|brief|block fixes the owner's way (A/B runs, odd machines);
+/* A spin's clock readings more than this apart: the thread was off its core meanwhile,
+ * for another task (a time slice, ~1 ms or more). Shorter gaps are interrupts and a VM's
+ * exits, which blocking would not help: at 20 us they counted as trouble ~50 times in a
+ * 20 s flight on the 2-core VM, and each sent a waiter to sleep on a vCPU that then took
+ * hundreds of us to wake. */
+#define SB_HANDOFF_GAP_NS 500000
+/* SILBRIDGE_HANDOFF=spin|brief|block|stack fixes the owner's way (A/B runs, odd machines);
  * unset or "auto": measured. */
 #define SB_HANDOFF_ENV "SILBRIDGE_HANDOFF"
 
@@ -45,6 +50,7 @@ typedef struct sb_handoff {
     sb_handoff_stats stats;
     sb_handoff_choice choice; /* the owner's; the peer follows the header's handoff_arm */
     uint64_t trouble_published; /* peer: the trouble count last stored in the header */
+    sb_pin pin;               /* the waiting thread, held on one CPU while the arm is STACK */
 } sb_handoff;
 
 /* The arm SILBRIDGE_HANDOFF names, or -1 (auto). */
@@ -54,6 +60,17 @@ int sb_handoff_env_arm(void);
  * 1: ready; 0: the deadline passed. */
 int sb_handoff_wait(sb_handoff_stats *st, sb_doorbell *bell, sb_ready_fn ready, const void *ctx,
                     int64_t spin_ns, int64_t deadline_ns);
+
+struct sb_seg_header;
+
+/* STACK (sb_handoff_choice.h, sb_pin.h). Owner, before a wait: with STACK in use, hold the
+ * waiting thread on its CPU and name that CPU in the header (once per STACK period). */
+void sb_handoff_owner_hold(struct sb_seg_header *h, sb_handoff *ho, int arm);
+/* Owner: its choice moved from `from` to `to`: leaving STACK gives its CPUs back and takes
+ * the CPU's name out of the header; then the new way is published. */
+void sb_handoff_owner_switch(struct sb_seg_header *h, sb_handoff *ho, int from, int to);
+/* Peer, before a wait: join the owner's CPU while the way is STACK, leave it after. */
+void sb_handoff_peer_follow(struct sb_seg_header *h, sb_handoff *ho, uint32_t arm);
 
 static inline uint64_t sb_handoff_trouble(const sb_handoff_stats *st)
 {

@@ -18,7 +18,12 @@
  * - BRIEF: the owner spins SB_SPIN_BRIEF_NS (the FC's answer, when the FC runs on the other
  *   core), then blocks; the peer, whose wait spans the bridge's whole step, blocks at once.
  * - BLOCK: block at once.
+ * - STACK: both sides held on the owner's CPU (sb_pin.h), block at once: a hand-off is two
+ *   context switches in the guest, and the pair needs one CPU instead of two. When the
+ *   other CPU is taken (a neighbour's work, or a VM host that takes vCPUs away), it beats
+ *   the others by far: on the 2-core VM ~70x real time where the others fell to 10-25x.
  * A probe that wins is checked: the arm it replaced is measured again after one window.
+ * Away from SPIN, every other probe measures SPIN (the way back); the rest take turns.
  * While BRIEF or BLOCK is in use, SPIN is measured again after a gap that starts at
  * SB_PROBE_GAP_MIN_NS and doubles (to SB_PROBE_GAP_MAX_NS: load on a shared machine comes
  * and goes in bursts) each time the choice holds; a
@@ -34,7 +39,9 @@
 
 #include <stdint.h>
 
-enum sb_handoff_arm { SB_ARM_SPIN = 0, SB_ARM_BRIEF = 1, SB_ARM_BLOCK = 2, SB_ARM_COUNT = 3 };
+enum sb_handoff_arm {
+    SB_ARM_SPIN = 0, SB_ARM_BRIEF = 1, SB_ARM_BLOCK = 2, SB_ARM_STACK = 3, SB_ARM_COUNT = 4
+};
 
 #define SB_SPIN_LONG_NS 300000   /* covers the other side's step and its usual Python */
 #define SB_SPIN_BRIEF_NS 5000    /* covers the FC's answer (~2 us) with a margin */
@@ -52,7 +59,10 @@ typedef struct sb_handoff_choice {
     int32_t arm;                        /* the way of waiting in use (sb_handoff_arm) */
     int32_t home;                       /* during a probe: the arm to compare it with; else -1 */
     int32_t forced;                     /* >= 0: always this arm, never measure (SILBRIDGE_HANDOFF) */
-    int32_t next_probe_arm;             /* the probes take the other arms in turn */
+    int32_t next_probe_arm;             /* the probes take the other arms in turn... */
+    int32_t last_probe;                 /* ...every other one SPIN while away from it */
+    int32_t recheck;                    /* >= 0: the next probe measures this arm (the home
+                                           a probe just replaced); -1: none */
     int64_t win_start_ns;               /* the measuring window: start [ns] */
     uint64_t win_steps;                 /*   steps ended in it */
     uint64_t win_trouble0;              /*   trouble count at its start */

@@ -29,8 +29,8 @@
 #include "sb_ring.h"
 
 #define SB_SEG_MAGIC 0x314D485342494C53ull /* "SLIBSHM1" read little-endian */
-#define SB_SEG_VERSION 4u /* 2: doorbells and the owner tag; 3: step words on the ring lines,
-                             hand-off; 4: the FC's sync word (FC_SYNC_NS) */
+#define SB_SEG_VERSION 5u /* 2: doorbells and the owner tag; 3: step words on the ring lines,
+                             hand-off; 4: the FC's sync word (FC_SYNC_NS); 5: stack_cpu */
 #define SB_SEG_WORDS 9u       /* lockstep word indices (shm/lockstep.py) */
 #define SB_SEG_WORD_LINES 8u  /* header lines for words[]: one per index below 8; 0, 1 (unused
                                  there) and 8 live on the rings' lines */
@@ -115,9 +115,11 @@ typedef struct sb_seg_header {
      * a CI job), so `silbridge clean` and leak checks can tell whose a leftover is. */
     _Alignas(SB_CACHE_LINE) char owner_tag[SB_SEG_TAG_MAX];
     /* Line 20: the lockstep hand-off's way of waiting (sb_handoff.h), written by the owner
-     * when its choice changes, read by the peer before each wait. */
+     * when its choice changes, read by the peer before each wait; with the STACK way, the
+     * CPU the owner holds its waiting thread on (-1: not yet), where the peer joins it. */
     _Alignas(SB_CACHE_LINE) _Atomic uint32_t handoff_arm;
-    uint32_t pad3[15];
+    _Atomic int32_t stack_cpu;
+    uint32_t pad3[14];
 } sb_seg_header;
 
 _Static_assert(sizeof(sb_seg_header) <= SB_SEG_HEADER_BYTES, "header fits its page");

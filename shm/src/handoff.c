@@ -20,6 +20,7 @@ int sb_handoff_env_arm(void)
     if (strcmp(v, "spin") == 0) return SB_ARM_SPIN;
     if (strcmp(v, "brief") == 0) return SB_ARM_BRIEF;
     if (strcmp(v, "block") == 0) return SB_ARM_BLOCK;
+    if (strcmp(v, "stack") == 0) return SB_ARM_STACK;
     return -1;
 }
 
@@ -63,4 +64,35 @@ int sb_handoff_wait(sb_handoff_stats *st, sb_doorbell *bell, sb_ready_fn ready, 
     if (!ok) st->timeouts++;
     st->wait_ns += (uint64_t)(sb_monotonic_ns() - start);
     return ok;
+}
+
+/* The STACK way (sb_pin.h): the owner holds its waiting thread on the CPU it runs on and
+ * names it in the header; the peer joins it there, and leaves it when the way changes. The
+ * system calls come once per change of the way, not per wait. */
+
+void sb_handoff_owner_hold(sb_seg_header *h, sb_handoff *ho, int arm)
+{
+    if (arm != SB_ARM_STACK || ho->pin.pinned || ho->pin.failed) return;
+    int cpu = sb_pin_here(&ho->pin);
+    if (cpu >= 0) atomic_store_explicit(&h->stack_cpu, cpu, memory_order_release);
+}
+
+void sb_handoff_owner_switch(sb_seg_header *h, sb_handoff *ho, int from, int to)
+{
+    if (from == SB_ARM_STACK) {
+        atomic_store_explicit(&h->stack_cpu, -1, memory_order_relaxed);
+        sb_pin_release(&ho->pin, -1);
+    }
+    atomic_store_explicit(&h->handoff_arm, (uint32_t)to, memory_order_release);
+}
+
+void sb_handoff_peer_follow(sb_seg_header *h, sb_handoff *ho, uint32_t arm)
+{
+    if (arm != SB_ARM_STACK) {
+        if (ho->pin.pinned) sb_pin_release(&ho->pin, ho->pin.cpu);   /* apart again at once */
+        return;
+    }
+    int cpu = atomic_load_explicit(&h->stack_cpu, memory_order_acquire);
+    if (cpu < 0 || (ho->pin.cpu == cpu && (ho->pin.pinned || ho->pin.failed))) return;
+    (void)sb_pin_to(&ho->pin, cpu);
 }

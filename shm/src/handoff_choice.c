@@ -19,18 +19,31 @@ void sb_choice_init(sb_handoff_choice *c, int64_t now_ns, int forced)
     c->forced = forced >= 0 && forced < SB_ARM_COUNT ? forced : -1;
     c->arm = c->forced >= 0 ? c->forced : SB_ARM_SPIN;
     c->home = -1;
-    c->next_probe_arm = SB_ARM_BRIEF;
+    c->next_probe_arm = SB_ARM_STACK; /* the first probe: the way that needs one CPU only */
+    c->last_probe = -1;
+    c->recheck = -1;
     c->win_start_ns = now_ns;
     c->probe_gap_ns = SB_PROBE_GAP_MIN_NS;
     c->next_probe_ns = now_ns;
 }
 
-/* The arm the next probe measures: the other arms in turn. */
+/* The arm the next probe measures: the home a probe just replaced, else SPIN every other
+ * time while away from it, else the other arms in turn. */
 static int probe_arm(sb_handoff_choice *c)
 {
-    int p = c->next_probe_arm;
-    if (p == c->arm) p = (p + 1) % SB_ARM_COUNT;
-    c->next_probe_arm = (p + 1) % SB_ARM_COUNT;
+    int p;
+    if (c->recheck >= 0) {
+        p = c->recheck;
+        c->recheck = -1;
+    } else if (c->arm != SB_ARM_SPIN && c->last_probe != SB_ARM_SPIN) {
+        p = SB_ARM_SPIN;
+    } else {
+        p = c->next_probe_arm;
+        while (p == c->arm || (p == SB_ARM_SPIN && c->arm != SB_ARM_SPIN))
+            p = (p + 1) % SB_ARM_COUNT;
+        c->next_probe_arm = (p + 1) % SB_ARM_COUNT;
+    }
+    c->last_probe = p;
     return p;
 }
 
@@ -45,7 +58,7 @@ static void end_probe(sb_handoff_choice *c, int64_t now_ns)
          * burst): measure the old home again after one window of the new arm. */
         c->switches++;
         c->probe_gap_ns = SB_PROBE_GAP_MIN_NS;
-        c->next_probe_arm = home;
+        c->recheck = home;
         c->next_probe_ns = now_ns;
         return;
     }

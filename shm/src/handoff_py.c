@@ -46,16 +46,16 @@ static int owner_wait(SegmentObject *self, uint64_t at_least, int64_t deadline_n
     int ok;
     if (sb_doorbells_off) return old_wait(step_ready, &ctx, deadline_ns);
     Py_BEGIN_ALLOW_THREADS
+    sb_handoff_owner_hold(h, ho, arm);
     ok = sb_handoff_wait(&ho->stats, sb_segment_their_bell(&self->seg), step_ready, &ctx,
                          sb_handoff_spin_ns(arm, 1), deadline_ns);
-    Py_END_ALLOW_THREADS
     if (ok) {
         uint64_t trouble = sb_handoff_trouble(&ho->stats) +
                            atomic_load_explicit(&h->peer_trouble, memory_order_relaxed);
         int next = sb_choice_step(&ho->choice, sb_monotonic_ns(), trouble);
-        if (next != arm)
-            atomic_store_explicit(&h->handoff_arm, (uint32_t)next, memory_order_relaxed);
+        if (next != arm) sb_handoff_owner_switch(h, ho, arm, next);
     }
+    Py_END_ALLOW_THREADS
     return ok;
 }
 
@@ -66,10 +66,11 @@ static int peer_wait(SegmentObject *self, int64_t deadline_ns)
     sb_handoff *ho = &self->handoff;
     sb_ring *r = &self->rings[SB_RING_SENSORS];
     records_ready_ctx ctx = {&r->ctl->head, r->tail};
-    uint32_t arm = atomic_load_explicit(&h->handoff_arm, memory_order_relaxed);
+    uint32_t arm = atomic_load_explicit(&h->handoff_arm, memory_order_acquire);
     int ok;
     if (sb_doorbells_off) return old_wait(records_ready, &ctx, deadline_ns);
     Py_BEGIN_ALLOW_THREADS
+    sb_handoff_peer_follow(h, ho, arm);
     ok = sb_handoff_wait(&ho->stats, sb_segment_their_bell(&self->seg), records_ready, &ctx,
                          sb_handoff_spin_ns((int)arm, 0), deadline_ns);
     Py_END_ALLOW_THREADS
@@ -116,14 +117,23 @@ void sb_handoff_fill_capi(SegmentObject *self, sb_capi *api)
 /* Start afresh (create / attach): the owner's choice and its published arm. */
 void sb_handoff_start(SegmentObject *self)
 {
+    sb_handoff_stop(self);
     memset(&self->handoff, 0, sizeof self->handoff);
     sb_choice_init(&self->handoff.choice, sb_monotonic_ns(), sb_handoff_env_arm());
-    if (self->seg.is_owner)
+    if (self->seg.is_owner) {
+        atomic_store_explicit(&self->seg.hdr->stack_cpu, -1, memory_order_relaxed);
         atomic_store_explicit(&self->seg.hdr->handoff_arm, (uint32_t)self->handoff.choice.arm,
-                              memory_order_relaxed);
+                              memory_order_release);
+    }
 }
 
-static const char *const ARM_NAMES[SB_ARM_COUNT] = {"spin", "brief", "block"};
+/* The segment closes: a thread held on one CPU for STACK gets its CPUs back. */
+void sb_handoff_stop(SegmentObject *self)
+{
+    sb_pin_release(&self->handoff.pin, -1);
+}
+
+static const char *const ARM_NAMES[SB_ARM_COUNT] = {"spin", "brief", "block", "stack"};
 
 /* handoff_stats() -> dict: this process's hand-off waits and (owner) its choice. */
 PyObject *sb_handoff_stats_dict(SegmentObject *self)
@@ -133,7 +143,7 @@ PyObject *sb_handoff_stats_dict(SegmentObject *self)
     const sb_handoff_choice *c = &self->handoff.choice;
     uint32_t arm = atomic_load_explicit(&self->seg.hdr->handoff_arm, memory_order_relaxed);
     return Py_BuildValue(
-        "{sKsKsKsKsKsKsKsKsssOsKsKsKs(LLL)sK}", "waits", (unsigned long long)st->waits,
+        "{sKsKsKsKsKsKsKsKsssOsKsKsKs(LLLL)sKsi}", "waits", (unsigned long long)st->waits,
         "wait_ns", (unsigned long long)st->wait_ns, "ready",
         (unsigned long long)st->ready, "spun", (unsigned long long)st->spun, "ran_out",
         (unsigned long long)st->ran_out, "preempted", (unsigned long long)st->preempted,
@@ -142,7 +152,9 @@ PyObject *sb_handoff_stats_dict(SegmentObject *self)
         "forced", c->forced >= 0 ? Py_True : Py_False, "windows",
         (unsigned long long)c->windows, "probes", (unsigned long long)c->probes, "switches",
         (unsigned long long)c->switches, "cost_ns", (long long)c->cost_ns[0],
-        (long long)c->cost_ns[1], (long long)c->cost_ns[2], "peer_trouble",
+        (long long)c->cost_ns[1], (long long)c->cost_ns[2], (long long)c->cost_ns[3],
+        "peer_trouble",
         (unsigned long long)atomic_load_explicit(&self->seg.hdr->peer_trouble,
-                                                 memory_order_relaxed));
+                                                 memory_order_relaxed),
+        "held_cpu", self->handoff.pin.pinned ? self->handoff.pin.cpu : -1);
 }

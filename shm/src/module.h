@@ -97,6 +97,7 @@ static inline int sb_in_lockstep(const SegmentObject *self)
 }
 
 void sb_handoff_start(SegmentObject *self);                  /* at create / attach */
+void sb_handoff_stop(SegmentObject *self);                   /* at close: CPUs given back */
 void sb_handoff_fill_capi(SegmentObject *self, sb_capi *api); /* the capsule's wait_step */
 PyObject *sb_handoff_stats_dict(SegmentObject *self);         /* Segment.handoff_stats() */
 

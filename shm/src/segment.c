@@ -76,7 +76,8 @@ uint64_t sb_layout_hash(void)
         offsetof(sb_doorbell, waiters), offsetof(sb_seg_header, owner_tag),
         offsetof(sb_ring_ctl, step_word), offsetof(sb_ring_ctl, sync_word),
         offsetof(sb_seg_header, peer_trouble),
-        offsetof(sb_seg_header, handoff_arm), SB_WORD_OWNER_STEP, SB_WORD_PEER_STEP,
+        offsetof(sb_seg_header, handoff_arm), offsetof(sb_seg_header, stack_cpu),
+        SB_WORD_OWNER_STEP, SB_WORD_PEER_STEP,
     };
     uint64_t h = 14695981039346656037ull;
     for (size_t i = 0; i < sizeof facts / sizeof facts[0]; ++i) fnv(&h, facts[i]);

@@ -36,6 +36,7 @@ static int Seg_clear(SegmentObject *self)
 static void Seg_dealloc(SegmentObject *self)
 {
     PyObject_GC_UnTrack(self);
+    sb_handoff_stop(self);
     sb_segment_close(&self->seg);
     Seg_clear(self);
     Py_CLEAR(self->name);
@@ -104,6 +105,7 @@ static PyObject *Seg_attach(SegmentObject *self, PyObject *name)
 
 static PyObject *Seg_close(SegmentObject *self, PyObject *Py_UNUSED(ignored))
 {
+    sb_handoff_stop(self);
     sb_segment_close(&self->seg);
     Py_RETURN_NONE;
 }

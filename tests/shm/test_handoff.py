@@ -56,7 +56,9 @@ cap = seg.c_capsule()
 polls = 0
 while not seg.word(ls.STOP):
     polls += serve_polls(cap, poll, float("inf"), 1 << 30, 0.5, 0, buf)[0]
-print(json.dumps({"polls": polls, "stats": seg.handoff_stats()}), flush=True)
+import os
+print(json.dumps({"polls": polls, "stats": seg.handoff_stats(),
+                  "cpus_held": sorted(os.sched_getaffinity(0))}), flush=True)
 seg.close()
 """
 
@@ -68,11 +70,12 @@ def _pair(name: str, arm: str | None) -> tuple[dict, dict, list]:
         env["SILBRIDGE_HANDOFF"] = arm
     # The owner's choice reads the variable when the segment is made: in a child, like the FC.
     owner = """
-import json, sys
+import json, os, sys
 import numpy as np
 from silbridge.shm import Segment, lockstep as ls
 from silbridge.shm.records import FLAG_STEP_END, RECORD_DTYPE, Kind
 steps = int(sys.argv[2])
+cpus_before = sorted(os.sched_getaffinity(0))
 with Segment.create(sys.argv[1]) as seg:
     seg.set_word(ls.RUN_MODE, ls.MODE_LOCKSTEP)
     peer = __import__("subprocess").Popen([sys.executable, "-c", sys.argv[3], sys.argv[1]],
@@ -92,6 +95,8 @@ with Segment.create(sys.argv[1]) as seg:
     seg.set_word(ls.STOP, ls.STOP_DONE)
     fc = json.loads(peer.communicate(timeout=30)[0])
     stats = seg.handoff_stats()     # after the FC's last wait: its trouble all published
+    stats["cpus_held"] = sorted(os.sched_getaffinity(0))
+stats["cpus_before"], stats["cpus_after"] = cpus_before, sorted(os.sched_getaffinity(0))
 print(json.dumps({"owner": stats, "fc": fc, "answers": answers}))
 """
     done = subprocess.run([sys.executable, "-c", owner, name, str(STEPS), _PEER], env=env,
@@ -101,7 +106,7 @@ print(json.dumps({"owner": stats, "fc": fc, "answers": answers}))
     return r["owner"], r["fc"], r["answers"]
 
 
-@pytest.mark.parametrize("arm", [None, "spin", "brief", "block"])
+@pytest.mark.parametrize("arm", [None, "spin", "brief", "block", "stack"])
 def test_every_step_is_answered_whatever_the_way_of_waiting(name, arm):
     owner, fc, answers = _pair(name, arm)
     assert answers == list(range(1, STEPS + 1))
@@ -117,6 +122,24 @@ def test_the_fc_follows_the_bridges_choice_to_block(name):
     for side in (owner, fc["stats"]):
         assert side["spun"] == side["ran_out"] == side["preempted"] == 0, side
         assert side["blocked"] + side["ready"] == side["waits"], side
+
+
+def test_stack_holds_both_sides_on_the_bridges_cpu_and_gives_the_cpus_back(name):
+    owner, fc, answers = _pair(name, "stack")
+    assert answers == list(range(1, STEPS + 1))
+    cpu = owner["held_cpu"]
+    assert cpu >= 0 and fc["stats"]["held_cpu"] == cpu
+    assert owner["cpus_held"] == fc["cpus_held"] == [cpu]
+    # Closing the segment gave the bridge's thread back every CPU it had.
+    assert owner["cpus_after"] == owner["cpus_before"]
+    for side in (owner, fc["stats"]):     # one CPU: spinning would only delay the other
+        assert side["spun"] == side["ran_out"] == side["preempted"] == 0, side
+
+
+def test_the_other_ways_hold_no_cpu(name):
+    owner, fc, _ = _pair(name, "spin")
+    assert owner["held_cpu"] == fc["stats"]["held_cpu"] == -1
+    assert owner["cpus_held"] == owner["cpus_before"]
 
 
 def test_the_fc_blocks_at_once_in_brief(name):
