@@ -91,7 +91,12 @@ SAMPLE_PROPERTIES = {
     "vn_ft_s": "velocities/v-north-fps", "ve_ft_s": "velocities/v-east-fps",
     "vd_ft_s": "velocities/v-down-fps",
     "lat_rad": "position/lat-geod-rad", "lon_rad": "position/long-gc-rad",
-    "hagl_ft": "position/h-agl-ft",
+    # Height above ground is this minus the terrain's elevation (Fdm.terrain_ft), which is
+    # what JSBSim's own position/h-agl-ft returns, the same double (flat terrain, the default
+    # ground callback; tests/bridge/test_fdm_height.py holds the two equal). The stage
+    # subtracts: h-agl-ft's getter places a contact point through the ground callback,
+    # ~1,300 instructions a step, where this one reads the geodetic altitude JSBSim keeps.
+    "geod_alt_ft": "position/geod-alt-ft",
     **{f"omega{i}_rad_s": f"fcs/m{i}-omega-rad_s" for i in range(1, 5)},
     "gear_contacts": "fcs/gear-contacts",
     "pressure_psf": "atmosphere/P-psf",
@@ -177,7 +182,8 @@ class Fdm:
         fdm["simulation/randomseed"] = int(random_seed) & 0x7FFFFFFF
         fdm["ic/lat-geod-deg"] = lat_deg
         fdm["ic/long-gc-deg"] = lon_deg
-        fdm["ic/terrain-elevation-ft"] = ground_alt_m / FT_M
+        self.terrain_ft = ground_alt_m / FT_M     # JSBSim holds exactly this double
+        fdm["ic/terrain-elevation-ft"] = self.terrain_ft
         fdm["ic/h-agl-ft"] = (self.rest_agl_m + initial_agl_m) / FT_M
         fdm["ic/psi-true-deg"] = heading_deg
         for name in ("ic/phi-deg", "ic/theta-deg", "ic/u-fps", "ic/v-fps", "ic/w-fps",
@@ -211,7 +217,8 @@ class Fdm:
         self.h_fbx, self.h_fby, self.h_fbz = h["fbx_lbf"], h["fby_lbf"], h["fbz_lbf"]
         self.h_phi, self.h_theta, self.h_psi = h["phi_rad"], h["theta_rad"], h["psi_rad"]
         self.h_vn, self.h_ve, self.h_vd = h["vn_ft_s"], h["ve_ft_s"], h["vd_ft_s"]
-        self.h_lat, self.h_lon, self.h_hagl = h["lat_rad"], h["lon_rad"], h["hagl_ft"]
+        self.h_lat, self.h_lon = h["lat_rad"], h["lon_rad"]
+        self.h_hagl = node("position/h-agl-ft")
         self.h_pressure, self.h_temp = h["pressure_psf"], h["temperature_r"]
         self.h_gear = h["gear_contacts"]
         self.h_omega = [h[f"omega{i}_rad_s"] for i in range(1, 5)]

@@ -166,7 +166,8 @@ class Simulator:
              "m_per_rad_lat": fdm.m_per_rad_lat, "m_per_rad_lon": fdm.m_per_rad_lon,
              "agl0_m": fdm.home_agl_m, "baro_alpha": self.baro.alpha,
              "cos_crash_tilt": self._cos_crash_tilt,
-             "strike_agl_m": self._strike_check_agl_m, "dt_s": self.dt_s,
+             "strike_agl_m": self._strike_check_agl_m, "terrain_ft": fdm.terrain_ft,
+             "dt_s": self.dt_s,
              "inv_omega_max2": imu.inv_omega_max2, "vib_accel": imu.vib_a,
              "vib_gyro": imu.vib_g, "range_accel": imu.range_a, "range_gyro": imu.range_g}
         vib = vibration_consts.stage_consts(self.scenario, fdm, self.vehicle)

@@ -17,7 +17,7 @@ const sb_named_double SB_FDM_SAMPLE_FIELDS[SB_FDM_SAMPLE_FIELD_COUNT] = {
     SAMPLE(fbx_lbf), SAMPLE(fby_lbf), SAMPLE(fbz_lbf),
     SAMPLE(phi_rad), SAMPLE(theta_rad), SAMPLE(psi_rad),
     SAMPLE(vn_ft_s), SAMPLE(ve_ft_s), SAMPLE(vd_ft_s),
-    SAMPLE(lat_rad), SAMPLE(lon_rad), SAMPLE(hagl_ft),
+    SAMPLE(lat_rad), SAMPLE(lon_rad), SAMPLE(geod_alt_ft),
     {"omega1_rad_s", offsetof(sb_fdm_sample, omega_rad_s[0])},
     {"omega2_rad_s", offsetof(sb_fdm_sample, omega_rad_s[1])},
     {"omega3_rad_s", offsetof(sb_fdm_sample, omega_rad_s[2])},
@@ -30,7 +30,7 @@ const sb_named_double SB_FDM_SAMPLE_FIELDS[SB_FDM_SAMPLE_FIELD_COUNT] = {
 const sb_named_double SB_STAGE_CONST_FIELDS[SB_STAGE_CONST_FIELD_COUNT] = {
     CONST(lbf_to_m_s2), CONST(ft_m), CONST(psf_pa), CONST(lat0_rad), CONST(lon0_rad),
     CONST(m_per_rad_lat), CONST(m_per_rad_lon), CONST(agl0_m), CONST(baro_alpha),
-    CONST(cos_crash_tilt), CONST(strike_agl_m),
+    CONST(cos_crash_tilt), CONST(strike_agl_m), CONST(terrain_ft),
     IMU_CONST(dt_s), IMU_CONST(inv_omega_max2), IMU_CONST(vib_accel), IMU_CONST(vib_gyro),
     IMU_CONST(range_accel), IMU_CONST(range_gyro),
     /* issue 26: bridge/vibration_consts.py fills these (all 0 with vibration off and no
@@ -170,7 +170,7 @@ static void to_truth(sb_sensor_stage *s, const sb_fdm_sample *in, truth_t *t)
     t->vel[0] = in->vn_ft_s * ft;
     t->vel[1] = in->ve_ft_s * ft;
     t->vel[2] = in->vd_ft_s * ft;
-    t->hagl_m = in->hagl_ft * ft;
+    t->hagl_m = (in->geod_alt_ft - c->terrain_ft) * ft;
     t->on_ground = in->gear_contacts > 0.0;
     st[ST_BARO_PA] += c->baro_alpha * (in->pressure_psf * c->psf_pa - st[ST_BARO_PA]);
     sb_quat_from_euler(in->phi_rad, in->theta_rad, in->psi_rad, t->q);

@@ -35,7 +35,8 @@ typedef struct {
     double phi_rad, theta_rad, psi_rad;      /* ZYX Euler angles, body FRD -> NED */
     double vn_ft_s, ve_ft_s, vd_ft_s;        /* velocity NED */
     double lat_rad, lon_rad;                 /* geodetic latitude, longitude */
-    double hagl_ft;                          /* CG height above ground */
+    double geod_alt_ft;                      /* CG geodetic altitude; minus terrain_ft: the
+                                                height above ground (bridge/fdm.py says why) */
     double omega_rad_s[4];                   /* rotor speeds, motors 1..4 */
     double gear_contacts;                    /* > 0 while a leg is loaded */
     double pressure_psf;                     /* static pressure [lbf/ft^2] */
@@ -55,6 +56,7 @@ typedef struct {
     double baro_alpha;      /* per-step weight of the baro's first-order lag */
     double cos_crash_tilt;  /* on the ground, a tilt cosine below this is a tip-over */
     double strike_agl_m;    /* below this CG height a rotor strike is checked [m] */
+    double terrain_ft;      /* the terrain's elevation JSBSim was given (flat ground) [ft] */
     sb_imu_consts imu;      /* the one-sample-per-step IMU model */
     /* Issue 26, all unused while vib.on and imu_rot_on are 0 (then the IMU is exactly the
      * model above): rotor vibration through frame and mount, the chip's ODR and AAF; the
@@ -73,7 +75,7 @@ typedef struct {
 } sb_named_double;
 
 #define SB_FDM_SAMPLE_FIELD_COUNT 22
-#define SB_STAGE_CONST_FIELD_COUNT 77
+#define SB_STAGE_CONST_FIELD_COUNT 78
 extern const sb_named_double SB_FDM_SAMPLE_FIELDS[SB_FDM_SAMPLE_FIELD_COUNT];
 extern const sb_named_double SB_STAGE_CONST_FIELDS[SB_STAGE_CONST_FIELD_COUNT];
 

@@ -112,7 +112,7 @@ def imu_scalar(c: dict, af, w, omega, phase: list, n, j) -> tuple:
 def to_truth(c: dict, s: dict, st) -> dict:
     """JSBSim's feet, pounds and geodetic angles to SI truth in NED/FRD (and the baro lag)."""
     lbf, ft = c["lbf_to_m_s2"], c["ft_m"]
-    hagl_m = s["hagl_ft"] * ft
+    hagl_m = (s["geod_alt_ft"] - c["terrain_ft"]) * ft
     st[K.ST_BARO_PA] += c["baro_alpha"] * (s["pressure_psf"] * c["psf_pa"] - st[K.ST_BARO_PA])
     return {
         "w": (s["p_rad_s"], s["q_rad_s"], s["r_rad_s"]),

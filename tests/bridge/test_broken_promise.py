@@ -28,11 +28,13 @@ def _lying_fc(seg, done: threading.Event) -> None:
         if not n:
             seg.sensors.wait(0.01)
             continue
-        sim_ns = int(buf["sim_ns"][n - 1])
-        pwm["sim_ns"] = sim_ns
-        seg.actuators.push_batch(pwm)
+        # A PWM for every step it took (the bridge wakes it only before it waits, so one
+        # wake-up can bring several steps), each stamped with its step's time.
+        for sim_ns in np.unique(buf["sim_ns"][:n]).tolist():
+            pwm["sim_ns"] = sim_ns
+            seg.actuators.push_batch(pwm)
         seg.set_word(ls.FC_SYNC_NS, 1 << 62)     # "nothing from me for ever"
-        seg.set_word(ls.FC_SIM_NS, sim_ns)
+        seg.set_word(ls.FC_SIM_NS, int(buf["sim_ns"][n - 1]))
 
 
 def test_a_pwm_for_a_promised_step_stops_the_run(request):

@@ -95,6 +95,7 @@ def _run_oracle(sample, consts, baro_pa, next_slow_ns, flip_steps):
 CASES = {
     # name: (changes to the flown sample, next_slow_ns, flip_steps, flags expected)
     "hover": ({}, 10**12, 100, 0),
+    # hagl_ft: the height above ground, set as the geodetic altitude over the terrain
     "tipped on the ground": ({"phi_rad": 1.2, "hagl_ft": 0.3, "gear_contacts": 1.0}, 0, 100,
                              _step.F_SLOW_DUE | _step.F_TIPPED | _step.F_ROTOR_STRIKE
                              | _step.F_GROUND_CHANGED),
@@ -106,6 +107,9 @@ CASES = {
 def test_the_c_stage_alone_writes_what_the_oracle_writes(driver, flown, case):
     change, next_slow_ns, flip_steps, expected = CASES[case]
     sample, consts, baro_pa = flown
+    change = dict(change)
+    if "hagl_ft" in change:
+        change["geod_alt_ft"] = consts["terrain_ft"] + change.pop("hagl_ft")
     sample = {**sample, **change}
     c_flags, c_bytes, c_state = _run_c(driver, sample, consts, baro_pa, next_slow_ns, flip_steps)
     o_flags, o_bytes, o_state = _run_oracle(sample, consts, baro_pa, next_slow_ns, flip_steps)
@@ -120,4 +124,5 @@ def test_the_c_stage_alone_writes_what_the_oracle_writes(driver, flown, case):
     assert kinds == [1, 5, 6, 2, 3]
     step_end = np.frombuffer(c_bytes, dtype="<u2").reshape(5, 32)[-1, 1]
     assert step_end == (0 if expected & _step.F_SLOW_DUE else 1)
-    assert math.isclose(c_state[_step.ST_HAGL], sample["hagl_ft"] * 0.3048)
+    assert math.isclose(c_state[_step.ST_HAGL],
+                        (sample["geod_alt_ft"] - consts["terrain_ft"]) * 0.3048)
