@@ -95,7 +95,7 @@ SAMPLE_PROPERTIES = {
     # what JSBSim's own position/h-agl-ft returns, the same double (flat terrain, the default
     # ground callback; tests/bridge/test_fdm_height.py holds the two equal). The stage
     # subtracts: h-agl-ft's getter places a contact point through the ground callback,
-    # ~1,300 instructions a step, where this one reads the geodetic altitude JSBSim keeps.
+    # about 1,400 instructions a step, where this one reads the geodetic altitude JSBSim keeps.
     "geod_alt_ft": "position/geod-alt-ft",
     **{f"omega{i}_rad_s": f"fcs/m{i}-omega-rad_s" for i in range(1, 5)},
     "gear_contacts": "fcs/gear-contacts",

@@ -36,8 +36,8 @@ void sb_lockstep_publish(sb_lockstep *l, const sb_record *recs, size_t n, int64_
                           memory_order_release);
 }
 
-/* The Python path rings the doorbell after the push and after the word; nobody waits in
- * between, so one ring after both does the same. The batch rings only before it waits:
+/* The Python path rings the doorbell after the push and after the word of every step. The
+ * batch rings once, after both, and only before it waits:
  * a sleeping FC is not woken for a step the bridge does not wait for (it takes that step
  * with the next one), which saves a wake-up (a system call, and on two CPUs an interrupt
  * to the FC's) on three steps in five; a spinning FC sees the records without a ring. */

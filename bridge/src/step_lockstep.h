@@ -81,7 +81,8 @@ typedef struct {
     int64_t skipped_ns;       /* the newest of them (-1: none) */
 } sb_lockstep;
 
-/* Step k's n records: to the trace and the sensor ring, then the step word, one doorbell. */
+/* Step k's n records: to the trace and the sensor ring, then the step word (the doorbell
+ * is sb_lockstep_ring's, rung only before a wait). */
 void sb_lockstep_publish(sb_lockstep *l, const sb_record *recs, size_t n, int64_t sim_ns);
 
 /* Wake the FC if it sleeps on the segment's doorbell: before the bridge waits for it. */

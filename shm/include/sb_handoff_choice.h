@@ -24,7 +24,7 @@
  *   the others by far: on the 2-core VM ~70x real time where the others fell to 10-25x.
  * A probe that wins is checked: the arm it replaced is measured again after one window.
  * Away from SPIN, every other probe measures SPIN (the way back); the rest take turns.
- * While BRIEF or BLOCK is in use, SPIN is measured again after a gap that starts at
+ * While another way than SPIN is in use, SPIN is measured again after a gap that starts at
  * SB_PROBE_GAP_MIN_NS and doubles (to SB_PROBE_GAP_MAX_NS: load on a shared machine comes
  * and goes in bursts) each time the choice holds; a
  * window much slower than the one before (the load changed) measures the others at once.

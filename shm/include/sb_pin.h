@@ -6,7 +6,7 @@
  * host takes one away now and then, a step waits for it, and a waiter that gave up its
  * spin sleeps on a vCPU that then halts: waking it costs hundreds of microseconds, the
  * other side's spin runs out meanwhile and it sleeps too, and the pair ends up waking each
- * other for every step (measured on the 2-core VM: 10-15x real time in such a run, 70-110x
+ * other for every step (measured on the 2-core VM: 10-25x real time in such a run, 70-110x
  * in the runs around it). Both processes on one CPU hand a step over with two context
  * switches inside the guest (a few us each) and need only that one vCPU: about 70x in the
  * same sitting, whatever the other vCPU does.
