@@ -14,6 +14,7 @@ from mcap.stream_reader import StreamReader
 
 from silbridge.shm.records import RECORD_DTYPE, Kind, empty
 from silbridge.tools.logs.log_synth import SYNTH_STATUS_DTYPE, synthetic_run, write_run
+from silbridge.tools.logs.mcap_layout import MAGIC, OP_MESSAGE, RECORD_PREFIX
 from silbridge.tools.logs.mcap_log import TIMING_DTYPE, LogError, LogWriter, read_log
 
 
@@ -263,6 +264,34 @@ def test_truncated_file_reads_up_to_the_cut(tmp_path, run):
     imu = log.channels["/imu"]
     assert 0 < len(imu) <= len(run.channels["/imu"])
     _same_rows(imu, run.channels["/imu"][: len(imu)])
+
+
+def test_a_cut_anywhere_reads_a_prefix(tmp_path, run):
+    """The scan walks the records by their lengths: a file cut inside a record's prefix,
+    inside its fields or right after it (a killed writer, a copy stopped early) reads up
+    to the cut and says so; never an exception, never a row that was not written."""
+    path = tmp_path / "whole.mcap"
+    with LogWriter(path, metadata=run.metadata, batch_rows=200) as w:
+        write_run(run, w)
+    data = path.read_bytes()
+    whole = read_log(path).channels
+    # Cuts around the starts of three batch messages in the data section, byte by byte.
+    starts, at = [], len(MAGIC)
+    while at < len(data) // 2:
+        op, length = RECORD_PREFIX.unpack_from(data, at)
+        if op == OP_MESSAGE:
+            starts.append(at)
+        at += RECORD_PREFIX.size + length
+    starts = starts[1:4]
+    assert len(starts) == 3
+    cut = tmp_path / "cut.mcap"
+    for at in sorted({s + d for s in starts for d in range(-2, 40)}):
+        cut.write_bytes(data[:at])
+        log = read_log(cut)
+        assert log.truncated and log.end is None and "cut at byte" in log.read_error, at
+        for name, rows in log.channels.items():
+            assert len(rows) <= len(whole[name])
+            _same_rows(rows, whole[name][: len(rows)])
 
 
 def test_flipped_byte_is_caught_by_the_crc(tmp_path, run):

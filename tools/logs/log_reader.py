@@ -1,7 +1,7 @@
 """Reading a run log back: `read_log(path) -> RunLog`.
 
-One pass over the MCAP records with the mcap stream reader (no index needed,
-so a file cut short by a killed writer reads up to its cut); the rows of each
+One pass over the MCAP records of the mapped file (no index needed, so a file
+cut short by a killed writer reads up to its cut; `_scan`); the rows of each
 channel's batch messages are then joined and viewed as one numpy array
 (tools/logs/log_schema.py: the rows' CDR bytes are their numpy bytes): 120 s of
 every channel of a 1 kHz run reads back in well under a second. The viewable
@@ -17,19 +17,27 @@ the integrity check (tools/logs/integrity.py) refuses such a log.
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
+import mmap
+import struct
 from pathlib import Path
 
 import numpy as np
+from mcap.data_stream import ReadDataStream
 from mcap.exceptions import EndOfFile
-from mcap.records import Channel, Chunk, Footer, Message, Metadata
-from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.records import Channel, Chunk, Message, Metadata
+from mcap.stream_reader import breakup_chunk
 
 from silbridge.tools.logs.log_format import (CHANNEL_DTYPE_KEY, EVENTS_CHANNEL, META_END,
                                              META_RUN, LogError)
 from silbridge.tools.logs.log_schema import (CorruptChannel, decode_messages, dtype_from_json,
                                         visible)
-from silbridge.tools.logs.mcap_layout import MAGIC, MESSAGE_CHANNEL, OP_MESSAGE
+from silbridge.tools.logs.mcap_layout import (CHUNK_HEAD, MAGIC, MESSAGE_CHANNEL, MESSAGE_HEAD,
+                                             OP_CHANNEL, OP_CHUNK, OP_FOOTER, OP_MESSAGE,
+                                             OP_METADATA, RECORD_PREFIX)
+
+_U16 = struct.Struct("<H")
 
 
 @dataclasses.dataclass
@@ -97,7 +105,7 @@ def read_log(path: str | Path, channels: list[str] | None = None) -> RunLog:
         if ch.topic == EVENTS_CHANNEL:
             for i, m in enumerate(msgs):
                 try:
-                    e = json.loads(m)
+                    e = json.loads(bytes(m))
                     events.append({"sim_ns": int(e["sim_ns"]), "kind": e["name"],
                                    "text": e["message"], "fields": e.get("fields", {})})
                 except (ValueError, KeyError, TypeError) as exc:
@@ -121,18 +129,21 @@ def _scan(f, size: int, wanted: list[str] | None):
     """One pass over the MCAP records: channels, raw messages per channel, metadata.
 
     Returns (channels, messages, metadata, cut, damage): `cut` says where a file
-    cut short ends, `damage` where unreadable bytes stopped the scan.
+    cut short ends, `damage` where unreadable bytes stopped the scan. The file is
+    mapped, not read: a Message record, nearly every record of a run log, is taken
+    where it lies (its data a view of the mapping, no copy, no per-record object),
+    and the chunks of the viewable channels are never touched. The rare other
+    records (channels, metadata, compressed chunks) are decoded by the mcap package.
+    A bench campaign reads each run's log back for its metrics: the mcap stream
+    reader took 90 ms of a 120 s run's 1.6 s there, this about a tenth.
     """
     chans: dict[int, Channel] = {}
-    messages: dict[int, list[bytes]] = {}
+    messages: dict[int, list] = {}
     meta: dict[str, dict] = {}
     footer = False
     cut = damage = None
     keep = (lambda topic: True) if wanted is None else \
         (lambda topic: topic in wanted or topic == EVENTS_CHANNEL)
-    # No running CRC over the whole data section: our writer leaves its CRC 0 (every batch
-    # carries its own CRC-32), and compressed chunks are checked when broken up below.
-    reader = StreamReader(f, validate_crcs=False, record_size_limit=None, emit_chunks=True)
 
     def take(rec) -> None:
         if isinstance(rec, Message):
@@ -144,32 +155,62 @@ def _scan(f, size: int, wanted: list[str] | None):
         elif isinstance(rec, Metadata):
             meta[rec.name] = rec.metadata
 
+    data = memoryview(mmap.mmap(f.fileno(), size, access=mmap.ACCESS_READ))
+    prefix, head = RECORD_PREFIX.size, MESSAGE_HEAD.size
+    pos = len(MAGIC)
+    wanted_ids: dict[int, list | None] = {}    # channel id -> its message list, None: unwanted
     try:
-        for rec in reader.records:
-            if isinstance(rec, Chunk):
-                if _skip_chunk(rec, chans, keep):
-                    continue
-                for inner in breakup_chunk(rec, validate_crc=True):
-                    take(inner)
-            elif isinstance(rec, Footer):
+        while pos < size:
+            if pos + prefix > size:
+                raise EndOfFile()
+            op, length = RECORD_PREFIX.unpack_from(data, pos)
+            end = pos + prefix + length
+            if end > size:
+                raise EndOfFile()
+            if op == OP_MESSAGE:
+                cid = _U16.unpack_from(data, pos + MESSAGE_CHANNEL.start)[0]
+                out = wanted_ids.get(cid, False)
+                if out is False:        # a channel not seen yet: decide once
+                    ch = chans.get(cid)
+                    out = messages.setdefault(cid, []) if ch is not None and keep(ch.topic) \
+                        else None
+                    if ch is not None:
+                        wanted_ids[cid] = out
+                if out is not None:
+                    out.append(data[pos + head:end])
+            elif op == OP_CHUNK:
+                if not _skip_chunk_at(data, pos, end, chans, keep):
+                    chunk = Chunk.read(ReadDataStream(io.BytesIO(data[pos + prefix:end])))
+                    for inner in breakup_chunk(chunk, validate_crc=True):
+                        take(inner)
+            elif op == OP_FOOTER:
                 footer = True
-            else:
-                take(rec)
+                break
+            elif op in (OP_CHANNEL, OP_METADATA):
+                stream = ReadDataStream(io.BytesIO(data[pos + prefix:end]))
+                take(Channel.read(stream) if op == OP_CHANNEL else Metadata.read(stream))
+            pos = end
     except EndOfFile:
         cut = f"file ends inside a record (cut at byte {size})"
     except Exception as exc:  # noqa: BLE001 - any decoder error ends the readable part
-        damage = f"unreadable data before byte {f.tell()} of {size}: " \
+        damage = f"unreadable data before byte {pos} of {size}: " \
                  f"{type(exc).__name__}: {exc}"
     if not footer and cut is None and damage is None:
         cut = f"file ends without an MCAP footer (cut at byte {size})"
+    for cid in [c for c, m in messages.items() if not m]:
+        del messages[cid]
     return chans, messages, meta, cut, damage
 
 
-def _skip_chunk(chunk: Chunk, chans: dict, keep) -> bool:
+def _skip_chunk_at(data, pos: int, end: int, chans: dict, keep) -> bool:
     """True for an uncompressed chunk whose first message is on a channel not wanted, or on
-    one holding no batches: the one-channel chunks of the viewable channels."""
-    data = chunk.data
-    if chunk.compression or len(data) < MESSAGE_CHANNEL.stop or data[0] != OP_MESSAGE:
+    one holding no batches: the one-channel chunks of the viewable channels, skipped unread."""
+    if end - pos < CHUNK_HEAD.size:
         return False
-    ch = chans.get(int.from_bytes(data[MESSAGE_CHANNEL], "little"))
+    fields = CHUNK_HEAD.unpack_from(data, pos)
+    compression_length = fields[6]
+    records = pos + CHUNK_HEAD.size - 8 + compression_length + 8
+    if compression_length or records + MESSAGE_CHANNEL.stop > end or data[records] != OP_MESSAGE:
+        return False
+    ch = chans.get(_U16.unpack_from(data, records + MESSAGE_CHANNEL.start)[0])
     return ch is not None and (CHANNEL_DTYPE_KEY not in ch.metadata or not keep(ch.topic))

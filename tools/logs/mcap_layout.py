@@ -3,9 +3,10 @@
 Writers built on it: tools/logs/mcap_writer.py (`McapFile`, a whole unchunked file),
 tools/logs/viz_codec.py (the viewable channels' fixed-size Message records, a batch at a time
 as numpy rows of `MESSAGE_HEAD_FIELDS`) and tools/logs/viz_log.py (variable-size messages,
-`message_records`). tools/logs/log_reader.py peeks at a chunk's first record here
-(`OP_MESSAGE`, `MESSAGE_CHANNEL`) to skip it unread; everything else it reads goes through
-the mcap package, which is also what checks these bytes (tests/tools/test_mcap_log.py).
+`message_records`). tools/logs/log_reader.py walks the records by these prefixes, takes each
+Message record's data where it lies and peeks at a chunk's first record to skip it unread;
+the other records it reads go through the mcap package, which is also what checks these
+bytes (tests/tools/test_mcap_log.py).
 
 Layout rules used throughout: little-endian fixed widths; a record is an opcode byte, a u64
 length of what follows, then its fields; a string or byte array is a u32 length then the
