@@ -84,7 +84,7 @@ def part_of(stack: list[str]) -> str:
     """The part of a step a sample of the bridge's loop belongs to (PARTS)."""
     inside = any(f.startswith(LOOP_MARK) for f in stack)
     for name, where, marks in PARTS:
-        if where == "batch" and not inside or where == "outside" and inside:
+        if (where == "batch" and not inside) or (where == "outside" and inside):
             continue
         if not marks or any(m in f for f in stack for m in marks):
             return name
@@ -175,7 +175,10 @@ def main(argv: list[str] | None = None) -> int:
     except ClockBudgetError as exc:
         print(f"clock_budget: {exc}", file=sys.stderr)
         return 2
-    print(json.dumps(r)) if a.json else _print(r)
+    if a.json:
+        print(json.dumps(r))
+    else:
+        _print(r)
     return 0
 
 
