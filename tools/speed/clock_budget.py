@@ -165,7 +165,9 @@ def _print(r: dict) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m silbridge.tools.speed.clock_budget",
                                  description=__doc__.split("\n\n")[0])
-    ap.add_argument("--processes", type=int, choices=(1, 2), default=1)
+    ap.add_argument("--processes", type=int, choices=(1, 2), default=1,
+                    help="the FC in the loop's process (1) or in its own (2) "
+                         "(default %(default)s)")
     ap.add_argument("--duration", type=float, default=60.0, metavar="S",
                     help="simulated seconds (default %(default)s)")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
