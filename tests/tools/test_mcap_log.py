@@ -294,6 +294,23 @@ def test_a_cut_anywhere_reads_a_prefix(tmp_path, run):
             _same_rows(rows, whole[name][: len(rows)])
 
 
+def test_a_file_that_cannot_be_mapped_is_read_whole(tmp_path, run, monkeypatch):
+    import silbridge.tools.logs.log_reader as log_reader
+    path = tmp_path / "whole.mcap"
+    with LogWriter(path, metadata=run.metadata, batch_rows=200) as w:
+        write_run(run, w)
+    mapped = read_log(path)
+
+    def no_map(*_a, **_k):
+        raise OSError("mmap: not on this file system")
+    monkeypatch.setattr(log_reader.mmap, "mmap", no_map)
+    read = read_log(path)
+    assert read.read_error is None and read.events == mapped.events
+    assert set(read.channels) == set(mapped.channels)
+    for name, rows in mapped.channels.items():
+        _same_rows(read.channels[name], rows)
+
+
 def test_flipped_byte_is_caught_by_the_crc(tmp_path, run):
     path = tmp_path / "bad.mcap"
     with LogWriter(path, metadata=run.metadata, batch_rows=200) as w:

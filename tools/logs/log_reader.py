@@ -155,7 +155,12 @@ def _scan(f, size: int, wanted: list[str] | None):
         elif isinstance(rec, Metadata):
             meta[rec.name] = rec.metadata
 
-    data = memoryview(mmap.mmap(f.fileno(), size, access=mmap.ACCESS_READ))
+    try:
+        data = memoryview(mmap.mmap(f.fileno(), size, access=mmap.ACCESS_READ))
+    except (OSError, ValueError):    # a file system that cannot map it: read it whole
+        f.seek(0)
+        data = memoryview(f.read(size))
+        size = len(data)
     prefix, head = RECORD_PREFIX.size, MESSAGE_HEAD.size
     pos = len(MAGIC)
     wanted_ids: dict[int, list | None] = {}    # channel id -> its message list, None: unwanted
