@@ -145,11 +145,24 @@ def _scan(f, size: int, wanted: list[str] | None):
     keep = (lambda topic: True) if wanted is None else \
         (lambda topic: topic in wanted or topic == EVENTS_CHANNEL)
 
+    sinks: dict[int, list | None] = {}    # channel id -> its message list, None: unwanted
+
+    def sink(cid: int) -> list | None:
+        """Where a message of channel cid goes (None: dropped); decided once per channel,
+        after its Channel record (a message before it is dropped, as the stream reader did)."""
+        out = sinks.get(cid, False)
+        if out is False:
+            ch = chans.get(cid)
+            out = messages.setdefault(cid, []) if ch is not None and keep(ch.topic) else None
+            if ch is not None:
+                sinks[cid] = out
+        return out
+
     def take(rec) -> None:
         if isinstance(rec, Message):
-            ch = chans.get(rec.channel_id)
-            if ch is not None and keep(ch.topic):
-                messages.setdefault(rec.channel_id, []).append(rec.data)
+            out = sink(rec.channel_id)
+            if out is not None:
+                out.append(rec.data)
         elif isinstance(rec, Channel):
             chans.setdefault(rec.id, rec)
         elif isinstance(rec, Metadata):
@@ -163,7 +176,6 @@ def _scan(f, size: int, wanted: list[str] | None):
         size = len(data)
     prefix, head = RECORD_PREFIX.size, MESSAGE_HEAD.size
     pos = len(MAGIC)
-    wanted_ids: dict[int, list | None] = {}    # channel id -> its message list, None: unwanted
     try:
         while pos < size:
             if pos + prefix > size:
@@ -173,14 +185,7 @@ def _scan(f, size: int, wanted: list[str] | None):
             if end > size:
                 raise EndOfFile()
             if op == OP_MESSAGE:
-                cid = _U16.unpack_from(data, pos + MESSAGE_CHANNEL.start)[0]
-                out = wanted_ids.get(cid, False)
-                if out is False:        # a channel not seen yet: decide once
-                    ch = chans.get(cid)
-                    out = messages.setdefault(cid, []) if ch is not None and keep(ch.topic) \
-                        else None
-                    if ch is not None:
-                        wanted_ids[cid] = out
+                out = sink(_U16.unpack_from(data, pos + MESSAGE_CHANNEL.start)[0])
                 if out is not None:
                     out.append(data[pos + head:end])
             elif op == OP_CHUNK:
@@ -202,8 +207,6 @@ def _scan(f, size: int, wanted: list[str] | None):
                  f"{type(exc).__name__}: {exc}"
     if not footer and cut is None and damage is None:
         cut = f"file ends without an MCAP footer (cut at byte {size})"
-    for cid in [c for c, m in messages.items() if not m]:
-        del messages[cid]
     return chans, messages, meta, cut, damage
 
 
