@@ -62,7 +62,7 @@ class Simulator:
     oracle, tests/bridge/step_kernel_oracle.py, which has the same interface)."""
 
     def __init__(self, scenario, imu_hz: int | None = None, block_rows: int = DEFAULT_BLOCK_ROWS,
-                 kernel_cls=_step.Kernel):
+                 kernel_cls=_step.Kernel, jsbsim_native: bool = True):
         sc = scenario
         self.scenario = sc
         self._set_rates(sc, imu_hz)
@@ -86,6 +86,7 @@ class Simulator:
         self.buffer = sb.StepBuffer(max_imu + 2 + 3 + 1 + 4 + esc_slots + 1)
         self._seq = [0] * len(Kind)   # records published per kind; the header seq is this mod 2^32
         self.kernel = self._make_kernel(kernel_cls)
+        self.jsbsim_nodes = self._bind_native(jsbsim_native)
         # GNSS fixes released by the kernel at their step (kernels with hold(): the C one).
         self._hold_gnss = hasattr(self.kernel, "hold")
         self._held_rec = bytearray(64)
@@ -200,6 +201,17 @@ class Simulator:
             self.buffer.buf, [h.set_double_value for h in fdm.h_pwm], fdm.fdm.run,
             fdm.sample_getters(), self._state, self._stage_consts(), np.array(self.imu.phase),
             self.dt_ns, self._flip_steps, self._scalar_imu, fdm.h_gear.get_double_value() > 0)
+
+    def _bind_native(self, wanted: bool) -> str:
+        """"c" when the kernel reads and writes JSBSim's nodes from C, past their Python
+        methods (bridge/src/jsbsim_native.h: the same values, proven at binding), else
+        "python: " and why (`fly --json` says it as jsbsim_nodes)."""
+        if not wanted:
+            return "python: asked for"
+        if not hasattr(self.kernel, "bind_native"):
+            return "python: the kernel has no C path"
+        why = self.kernel.bind_native()
+        return "c" if why is None else f"python: {why}"
 
     def _attach_kernel(self) -> None:
         """Give the kernel its noise, bias, forces and low-rate sensors; bind the step."""

@@ -7,7 +7,7 @@
  * No Python and no JSBSim here, as PX4 keeps RateControl free of topics: the CPython
  * shim (step_run.c) runs JSBSim, fills an sb_fdm_sample through the field table below
  * and calls sb_sensor_stage_step. The sample is the seam for whatever reads the FDM:
- * today bound Python getters, next JSBSim property nodes read from C; the stage does not
+ * JSBSim's property nodes read from C, or their bound Python methods; the stage does not
  * change. Constants arrive by name (SB_STAGE_CONST_FIELDS), never by position.
  *
  * Same formulas, in the same operation order, as the Python oracle

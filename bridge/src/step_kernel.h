@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "blake2b.h"
+#include "jsbsim_native.h"
 #include "sb_records.h"
 #include "sensor_stage.h"
 #include "step_call.h"
@@ -58,6 +59,11 @@ typedef struct {
     /* The FDM sample's getters, in SB_FDM_SAMPLE_FIELDS order (bound by name at init),
      * called from C (docs/howto/speed.md: how the step reaches JSBSim, and why so). */
     sb_call getters[SB_FDM_SAMPLE_FIELD_COUNT];
+    /* bind_native(): the C++ nodes behind those getters and the setters, called past
+     * their Python methods (jsbsim_native.h); jsb.get NULL: the Python methods are. */
+    sb_jsb_api jsb;
+    void *get_node[SB_FDM_SAMPLE_FIELD_COUNT];
+    void *set_node[4];
     /* The pulse widths last written into JSBSim [us], and whether they were: a held
      * command is not written again (the properties are JSBSim inputs nothing else sets). */
     double pwm_written[4];
@@ -139,6 +145,9 @@ PyObject *Kernel_battery_esc_power(Kernel *self, PyObject *omega);
 PyObject *Kernel_set_battery_cell(Kernel *self, PyObject *args);
 PyObject *Kernel_battery_lose_charge(Kernel *self, PyObject *arg);
 int sb_step_pack_load(Kernel *self, const double omega_rad_s[4]);
+
+/* step_native.c: Kernel.bind_native (JSBSim's nodes from C) */
+PyObject *Kernel_bind_native(Kernel *self, PyObject *unused);
 
 /* step_json.c: the module-level json_reply (ArduPilot SITL's JSON state line). */
 extern PyMethodDef sb_step_json_methods[];

@@ -1,11 +1,11 @@
 /*
  * step_run.c - one physics step of the bridge kernel, the CPython side (stepmodule.c has
  * the Python object around it): write the pulse widths and the disturbance forces into
- * JSBSim, run it, read the FDM sample back through the bound getters, and hand it to the
- * pure-C sensor stage (sensor_stage.c), which writes the step's records into the step
- * buffer. The only place that knows both JSBSim and the stage: issue 25 replaces
- * read_sample with property nodes read from C. The returned flags tell Python what it
- * handles itself (bridge/simulator.py).
+ * JSBSim, run it, read the FDM sample back through its property nodes (their C++ getters
+ * once bind_native proved them, jsbsim_native.h; else their bound Python methods), and hand
+ * it to the pure-C sensor stage (sensor_stage.c), which writes the step's records into the
+ * step buffer. The only place that knows both JSBSim and the stage. The returned flags tell
+ * Python what it handles itself (bridge/simulator.py).
  */
 #include "step_kernel.h"
 
@@ -29,6 +29,11 @@ static int write_pwm(Kernel *self, PyObject *const *pwm, int64_t k)
     for (int i = 0; i < 4; i++) {
         if (self->pwm_written_ok && d[i] == self->pwm_written[i])
             continue;
+        if (self->jsb.set != NULL) {       /* bind_native(): no Python on the way */
+            self->jsb.set(self->set_node[i], d[i]);
+            self->pwm_written[i] = d[i];
+            continue;
+        }
         PyObject *r = sb_call1(&self->setters[i], pwm[i]);
         if (r == NULL) {
             self->pwm_written_ok = 0;   /* unknown what JSBSim holds now: write all next time */
@@ -50,6 +55,11 @@ static int read_sample(Kernel *self, sb_fdm_sample *in, int64_t sim_ns)
         const size_t off = SB_FDM_SAMPLE_FIELDS[i].offset;
         if (off == skip)
             continue;
+        if (self->jsb.get != NULL) {       /* bind_native(): no Python on the way */
+            const double v = self->jsb.get(self->get_node[i]);
+            memcpy((char *)in + off, &v, sizeof v);
+            continue;
+        }
         PyObject *r = sb_call0(&self->getters[i]);
         if (r == NULL)
             return -1;

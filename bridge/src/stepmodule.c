@@ -2,7 +2,7 @@
  * stepmodule.c - silbridge.bridge._step: one physics step of the bridge in one call.
  *
  * `Kernel.step(pwm)` writes the four pulse widths into JSBSim, runs it, reads the
- * FDM sample back through the property nodes' bound methods, and the sensor stage
+ * FDM sample back through the property nodes (from C: step_native.c), and the sensor stage
  * (sensor_stage.c, plain C) writes the step's IMU, GT_ATT and GT_NAV records (64-byte
  * sb_record slots) into the simulator's step buffer, and the baro and magnetometer
  * records when due. Done from Python this costs ~6 us of interpreter work per step on
@@ -333,6 +333,9 @@ static PyMethodDef Kernel_methods[] = {
      "battery_lose_charge(fraction): that fraction of every cell's charge gone"},
     {"set_imbalance_scale", (PyCFunction)Kernel_set_imbalance_scale, METH_VARARGS,
      "set_imbalance_scale(motor 0..3, scale): a damaged prop's vibration"},
+    {"bind_native", (PyCFunction)Kernel_bind_native, METH_NOARGS,
+     "bind_native() -> None, or why not: read and write JSBSim's nodes from C, past their "
+     "Python methods (the same values)"},
     {NULL, NULL, 0, NULL}};
 
 static PyTypeObject KernelType = {

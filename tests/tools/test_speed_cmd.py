@@ -91,6 +91,20 @@ def test_the_table_has_a_row_per_case_the_skip_and_the_targets(result):
         assert any(line.startswith(result["cases"][name]["label"]) for line in lines), name
     assert "arducopter: skipped: no ArduCopter SITL binary" in text
     assert f"{result['cases']['fly1']['of_jsbsim']:.2f} / >= 0.80" in text
+    assert "through their Python methods" not in text
+
+
+def test_a_flight_off_the_c_nodes_is_said_in_the_report(result):
+    """Every flight case says how it reached JSBSim's nodes; one that fell back to the
+    Python methods (the same values, a slower step) gets a line saying so and why."""
+    for name in ("fly1", "fly2", "fly1_log", "fly2_log"):
+        assert result["cases"][name]["jsbsim_nodes"] == "c", name
+    changed = json.loads(json.dumps(result))
+    changed["cases"]["fly2"]["jsbsim_nodes"] = "python: getter p_rad_s: not a bound method"
+    lines: list[str] = []
+    print_report(changed, out=lines.append)
+    assert ("fly --processes 2: JSBSim's nodes through their Python methods (python: getter "
+            "p_rad_s: not a bound method)") in lines
 
 
 def test_a_bad_run_count_is_a_one_line_error():

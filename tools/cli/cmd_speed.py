@@ -85,6 +85,11 @@ def print_report(res: dict, out=print) -> None:
                 f"({c['single_run_x']:.1f}x: the 1-job campaign's runs, median)")
     for name, why in res["skipped"].items():
         out(f"{name}: skipped: {why}")
+    for name in res["order"]:
+        nodes = res["cases"][name].get("jsbsim_nodes", "c")
+        if nodes != "c":     # the same values, a slower step: the figures must say it
+            out(f"{res['cases'][name]['label']}: JSBSim's nodes through their Python methods "
+                f"({nodes})")
     out("medians; worst: the slowest run below the median; wall/cpu us: per physics step; "
         "loop_cpu_s: the bridge loop thread (one process: the FC's too)")
     if res["targets"]:

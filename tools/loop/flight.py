@@ -387,6 +387,9 @@ def summarise(opts: FlightOptions, sc, sim, res, fc_summary: dict) -> dict:
         # Steps the bridge published without waiting for an FC in its own process, which
         # had promised to answer them with nothing (shm/lockstep.py FC_SYNC_NS).
         "steps_overlapped": res.steps_overlapped,
+        # "c": the step read and wrote JSBSim's nodes from C; "python: why not" (the same
+        # values, slower: bridge/src/jsbsim_native.h).
+        "jsbsim_nodes": sim.jsbsim_nodes,
         "rates_hz": rates,
         "overwritten": overwritten,
         "rejected": rejected,

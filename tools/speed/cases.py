@@ -77,7 +77,7 @@ def flight(duration_s: float, processes: int, *, log: bool = False,
             log_argv = ["--log", os.path.join(tmp, "run.mcap")] if log else []
             r = _child(argv + log_argv, f"`silbridge {' '.join(argv[1:] + log_argv)}`")
         return {"realtime_factor": r["realtime_factor"], "loop_cpu_s": r["loop_cpu_s"],
-                "sim_s": r["sim_s"]}
+                "sim_s": r["sim_s"], "jsbsim_nodes": r.get("jsbsim_nodes")}
     return Case(name, label, run)
 
 

@@ -54,6 +54,10 @@ def case_figures(runs: list[dict], physics_hz: float) -> dict:
         out["loop_cpu_s"] = _spread([r["loop_cpu_s"] for r in runs])
         out["cpu_us_per_step"] = _spread([1e6 * r["loop_cpu_s"] / (r["sim_s"] * physics_hz)
                                           for r in runs])
+    # How the flights reached JSBSim's nodes (fly --json): "c", or why the Python methods.
+    nodes = sorted({r["jsbsim_nodes"] for r in runs if r.get("jsbsim_nodes")})
+    if nodes:
+        out["jsbsim_nodes"] = nodes[0] if len(nodes) == 1 else nodes
     return out
 
 
