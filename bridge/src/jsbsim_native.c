@@ -5,6 +5,7 @@
 #include "jsbsim_native.h"
 
 #include <dlfcn.h>
+#include <errno.h>
 #include <stdint.h>
 #include <string.h>
 #include <sys/uio.h>
@@ -53,13 +54,16 @@ static int resolve(void *code)
     return 1;
 }
 
-/* *out = the pointer-sized word at addr, read without faulting; 0 on success. */
+/* *out = the pointer-sized word at addr, read without faulting; 0 on success, else errno
+ * (EFAULT: nothing mapped there; EPERM or ENOSYS: a sandbox that forbids the call). */
 static int read_word(const void *addr, const void **out)
 {
     struct iovec local = {.iov_base = (void *)out, .iov_len = sizeof *out};
     struct iovec remote = {.iov_base = (void *)addr, .iov_len = sizeof *out};
-    return process_vm_readv(getpid(), &local, 1, &remote, 1, 0) == (ssize_t)sizeof *out ? 0
-                                                                                         : -1;
+    errno = 0;
+    if (process_vm_readv(getpid(), &local, 1, &remote, 1, 0) == (ssize_t)sizeof *out)
+        return 0;
+    return errno ? errno : EIO;
 }
 
 /* The node pointer inside a jsbsim FGPropertyNode object: the Cython struct is the object
@@ -111,7 +115,13 @@ void *sb_jsb_node(PyObject *method, const char *name, sb_jsb_api *api, char *why
         return NULL;
     }
     const void *vptr;
-    if (read_word(node, &vptr) < 0 || vptr != g_wheel.api.vtable) {
+    const int err = read_word(node, &vptr);
+    if (err != 0 && err != EFAULT) {
+        snprintf(why, why_len, "its node could not be checked (process_vm_readv: %s)",
+                 strerror(err));
+        return NULL;
+    }
+    if (err == EFAULT || vptr != g_wheel.api.vtable) {
         snprintf(why, why_len, "the FGPropertyNode's pointer is not an SGPropertyNode");
         return NULL;
     }

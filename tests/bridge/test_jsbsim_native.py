@@ -94,3 +94,42 @@ def test_a_look_alike_node_is_refused(monkeypatch):
     sim = Simulator(load_scenario("S1"))
     assert sim.jsbsim_nodes.startswith("python: getter q_rad_s: FGPropertyNode objects of ")
     assert sim.jsbsim_nodes.endswith("bytes: not the known layout")
+
+
+def test_an_uninitialised_node_is_refused(monkeypatch):
+    import jsbsim
+    real = fdm_module.Fdm.sample_getters
+
+    def empty(self):
+        getters = real(self)
+        getters["r_rad_s"] = jsbsim.FGPropertyNode().get_double_value
+        return getters
+    monkeypatch.setattr(fdm_module.Fdm, "sample_getters", empty)
+    sim = Simulator(load_scenario("S1"))
+    assert sim.jsbsim_nodes == "python: getter r_rad_s: an uninitialised FGPropertyNode"
+
+
+@pytest.mark.parametrize("target", ["unmapped", "not a node"])
+def test_a_pointer_that_is_not_a_node_is_refused_without_a_crash(monkeypatch, target):
+    """The address inside the wheel's object is checked before it is used: an address where
+    nothing is mapped, or memory that is not an SGPropertyNode, is refused (a wrong layout
+    would give either). The real address is put back before anything else can use it."""
+    import ctypes
+    stand_in = ctypes.create_string_buffer(64)       # zeros: no SGPropertyNode vtable
+    address = 0x1000 if target == "unmapped" else ctypes.addressof(stand_in)
+    real_bind = Simulator._bind_native
+
+    def bind_with_a_wrong_pointer(self, wanted):
+        node = self.fdm.sample_nodes["p_rad_s"]
+        field = ctypes.c_void_p.from_address(id(node) + type(node).__basicsize__ - 8)
+        kept = field.value
+        field.value = address
+        try:
+            return real_bind(self, wanted)
+        finally:
+            field.value = kept
+    monkeypatch.setattr(Simulator, "_bind_native", bind_with_a_wrong_pointer)
+    sim = Simulator(load_scenario("S1"))
+    assert sim.jsbsim_nodes == ("python: getter p_rad_s: the FGPropertyNode's pointer is not "
+                                "an SGPropertyNode")
+    sim.step((1000.0,) * 4)                           # the Python methods fly on
