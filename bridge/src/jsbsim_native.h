@@ -12,7 +12,7 @@
  * reason, and the caller keeps the Python methods: the same values, only slower.
  *
  * What is saved: per node and step, the Python method's call, its argument check and the
- * float object of its result (docs/howto/speed.md, "JSBSim's nodes from C").
+ * float object of its result (docs/howto/speed.md, "How the step reaches JSBSim").
  */
 #ifndef SB_JSBSIM_NATIVE_H
 #define SB_JSBSIM_NATIVE_H

@@ -48,6 +48,8 @@ static int Kernel_clear(Kernel *self)
     sb_call_clear(&self->run);
     for (int i = 0; i < SB_FDM_SAMPLE_FIELD_COUNT; i++)
         sb_call_clear(&self->getters[i]);
+    /* The C++ nodes lived on through those Python nodes: never call them after this. */
+    self->jsb = (sb_jsb_api){0};
     for (int i = 0; i < 4; i++)
         sb_call_clear(&self->pack_torque[i]);
     sb_step_clear_forces(self);

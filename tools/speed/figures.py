@@ -57,7 +57,7 @@ def case_figures(runs: list[dict], physics_hz: float) -> dict:
     # How the flights reached JSBSim's nodes (fly --json): "c", or why the Python methods.
     nodes = sorted({r["jsbsim_nodes"] for r in runs if r.get("jsbsim_nodes")})
     if nodes:
-        out["jsbsim_nodes"] = nodes[0] if len(nodes) == 1 else nodes
+        out["jsbsim_nodes"] = "; ".join(nodes)
     return out
 
 
