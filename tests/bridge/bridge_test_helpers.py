@@ -1,6 +1,10 @@
-"""Shared helpers of the bridge tests: quiet-sensor overrides and record filters."""
+"""Shared helpers of the bridge tests: quiet-sensor overrides, record filters and a
+flight profile that exercises the step kernel."""
 
 from __future__ import annotations
+
+import hashlib
+import math
 
 import numpy as np
 
@@ -28,3 +32,23 @@ def collect(sim, pwm, steps: int) -> np.ndarray:
     """Run `steps` steps with a constant PWM; return all records (copied)."""
     out = [sim.step(pwm).copy() for _ in range(steps)]
     return np.concatenate(out)
+
+
+def take_off_and_flip(sim, k: int) -> tuple[float, float, float, float]:
+    """PWM of step k: ground idle, a wobbly climb (a new width most steps), then an
+    asymmetric push that tips the quad over."""
+    h = sim.hover_pwm_us
+    if k < 300:
+        return (1000.0, 1000.0, 1000.0, 1000.0)
+    if k < 2500:
+        w = 40.0 * math.sin(k / 37.0)
+        return (h + 120 + w, h + 120 - w, h + 118 + 0.5 * w, h + 121 - 0.5 * w)
+    return (h + 300, h - 300, h + 300, h - 300)     # a hard roll/pitch: flips, then falls
+
+
+def profile_digest(sim, steps: int) -> str:
+    """SHA-256 of every record of `steps` steps of take_off_and_flip."""
+    digest = hashlib.sha256()
+    for k in range(steps):
+        digest.update(sim.step(take_off_and_flip(sim, k)).tobytes())
+    return digest.hexdigest()

@@ -7,33 +7,17 @@ Python method returns. The records must be the Python path's, bit for bit; anyth
 kernel cannot prove keeps the Python methods and says why, never a guess.
 """
 
-import hashlib
-import math
-
 import pytest
+from bridge_test_helpers import profile_digest
 
 from silbridge.bridge import fdm as fdm_module
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 
 
-def _profile(sim, k):
-    """On the legs, a wobbly climb (the setters see a new width most steps), then a flip."""
-    h = sim.hover_pwm_us
-    if k < 300:
-        return (1000.0,) * 4
-    if k < 2500:
-        w = 40.0 * math.sin(k / 37.0)
-        return (h + 120 + w, h + 120 - w, h + 118 + 0.5 * w, h + 121 - 0.5 * w)
-    return (h + 300, h - 300, h + 300, h - 300)
-
-
 def _fly(steps=4000, scenario="S1", **kw):
     sim = Simulator(load_scenario(scenario), **kw)
-    digest = hashlib.sha256()
-    for k in range(steps):
-        digest.update(sim.step(_profile(sim, k)).tobytes())
-    return digest.hexdigest(), sim
+    return profile_digest(sim, steps), sim
 
 
 def test_the_wheels_nodes_are_read_from_c():

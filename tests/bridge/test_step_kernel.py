@@ -8,35 +8,19 @@ constants and the FDM getters reach the C stage by name: a missing or unknown na
 is refused, never taken by position.
 """
 
-import hashlib
-import math
-
 import numpy as np
 import pytest
 import step_kernel_oracle
+from bridge_test_helpers import profile_digest
 
 from silbridge.bridge import _step
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 
 
-def _pwm_profile(sim, k):
-    """Ground idle, a wobbly climb, then an asymmetric push that tips the quad over."""
-    h = sim.hover_pwm_us
-    if k < 300:
-        return (1000.0, 1000.0, 1000.0, 1000.0)
-    if k < 2500:
-        w = 40.0 * math.sin(k / 37.0)
-        return (h + 120 + w, h + 120 - w, h + 118 + 0.5 * w, h + 121 - 0.5 * w)
-    return (h + 300, h - 300, h + 300, h - 300)     # a hard roll/pitch: flips, then falls
-
-
 def _run(kernel_cls, scenario, imu_hz, steps):
     sim = Simulator(load_scenario(scenario), imu_hz=imu_hz, kernel_cls=kernel_cls)
-    digest = hashlib.sha256()
-    for k in range(steps):
-        digest.update(sim.step(_pwm_profile(sim, k)).tobytes())
-    return digest.hexdigest(), sim
+    return profile_digest(sim, steps), sim
 
 
 @pytest.mark.parametrize("scenario,imu_hz", [("S1", None), ("S2", None), ("S3", None),

@@ -20,7 +20,6 @@ import dataclasses
 import io
 import json
 import mmap
-import struct
 from pathlib import Path
 
 import numpy as np
@@ -35,9 +34,7 @@ from silbridge.tools.logs.log_schema import (CorruptChannel, decode_messages, dt
                                         visible)
 from silbridge.tools.logs.mcap_layout import (CHUNK_HEAD, MAGIC, MESSAGE_CHANNEL, MESSAGE_HEAD,
                                              OP_CHANNEL, OP_CHUNK, OP_FOOTER, OP_MESSAGE,
-                                             OP_METADATA, RECORD_PREFIX)
-
-_U16 = struct.Struct("<H")
+                                             OP_METADATA, RECORD_PREFIX, U16)
 
 
 @dataclasses.dataclass
@@ -185,7 +182,7 @@ def _scan(f, size: int, wanted: list[str] | None):
             if end > size:
                 raise EndOfFile()
             if op == OP_MESSAGE:
-                out = sink(_U16.unpack_from(data, pos + MESSAGE_CHANNEL.start)[0])
+                out = sink(U16.unpack_from(data, pos + MESSAGE_CHANNEL.start)[0])
                 if out is not None:
                     out.append(data[pos + head:end])
             elif op == OP_CHUNK:
@@ -215,10 +212,10 @@ def _skip_chunk_at(data, pos: int, end: int, chans: dict, keep) -> bool:
     one holding no batches: the one-channel chunks of the viewable channels, skipped unread."""
     if end - pos < CHUNK_HEAD.size:
         return False
-    fields = CHUNK_HEAD.unpack_from(data, pos)
-    compression_length = fields[6]
-    records = pos + CHUNK_HEAD.size - 8 + compression_length + 8
-    if compression_length or records + MESSAGE_CHANNEL.stop > end or data[records] != OP_MESSAGE:
+    if CHUNK_HEAD.unpack_from(data, pos)[6]:      # compressed: its records are not bytes here
         return False
-    ch = chans.get(_U16.unpack_from(data, records + MESSAGE_CHANNEL.start)[0])
+    records = pos + CHUNK_HEAD.size                 # no compression name: the records follow
+    if records + MESSAGE_CHANNEL.stop > end or data[records] != OP_MESSAGE:
+        return False
+    ch = chans.get(U16.unpack_from(data, records + MESSAGE_CHANNEL.start)[0])
     return ch is not None and (CHANNEL_DTYPE_KEY not in ch.metadata or not keep(ch.topic))

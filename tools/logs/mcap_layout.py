@@ -48,7 +48,7 @@ MESSAGE_CHANNEL = slice(_CHANNEL_AT, _CHANNEL_AT + MESSAGE_HEAD_DTYPE["channel"]
 CHUNK_HEAD = struct.Struct("<BQQQQIIQ")
 CHUNK_FIXED = CHUNK_HEAD.size - RECORD_PREFIX.size
 
-_U16 = struct.Struct("<H")
+U16 = struct.Struct("<H")
 _U32 = struct.Struct("<I")
 _STATISTICS = struct.Struct("<QHIIIIQQ")  # messages, schemas, channels, attachments,
 #                                           metadata, chunks, message start, message end
@@ -81,13 +81,13 @@ def header_record(profile: str, library: str) -> bytes:
 
 
 def schema_record(schema_id: int, name: str, encoding: str, data: bytes) -> bytes:
-    return record(OP_SCHEMA, _U16.pack(schema_id) + string(name) + string(encoding)
+    return record(OP_SCHEMA, U16.pack(schema_id) + string(name) + string(encoding)
                   + prefixed(data))
 
 
 def channel_record(channel_id: int, schema_id: int, topic: str, message_encoding: str,
                    metadata: dict[str, str]) -> bytes:
-    return record(OP_CHANNEL, _U16.pack(channel_id) + _U16.pack(schema_id) + string(topic)
+    return record(OP_CHANNEL, U16.pack(channel_id) + U16.pack(schema_id) + string(topic)
                   + string(message_encoding) + string_map(metadata))
 
 
