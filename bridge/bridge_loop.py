@@ -42,8 +42,9 @@ _KIND_U16 = word_index(Kind.NONE, "kind", 2)
 
 # The most steps one run_batch takes: what its trace buffer is sized for. Between two
 # batches Python looks at the stop request: 256 steps are ~4 ms of wall time. A batch
-# costs ~45k instructions of Python, ~700 a step with 64; a GNSS epoch ends a batch every
-# 100 steps anyway (docs/howto/speed.md).
+# costs ~45k instructions of Python, ~180 a step with 256; a flight's batches end at that
+# length or at the IMU's noise refills (1,024 steps), the GNSS epochs being made in C
+# (docs/howto/speed.md).
 BATCH_MAX_STEPS = 256
 
 

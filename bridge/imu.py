@@ -36,6 +36,7 @@ import math
 
 import numpy as np
 
+from silbridge.bridge import _step
 from silbridge.bridge.noise import DEFAULT_BLOCK_ROWS, NormalRows
 from silbridge.bridge.scenario import draw_rng
 
@@ -60,10 +61,19 @@ class BiasWalk:
         self._last = np.zeros((1, 6))
 
     def next_block(self) -> np.ndarray:
-        inc = self._src.next_block() * self._sigma
-        walk = np.cumsum(np.vstack((self._last, inc)), axis=0)[1:]
+        walk = np.cumsum(np.vstack((self._last, self.next_increments())), axis=0)[1:]
         self._last = walk[-1:].copy()
         return walk
+
+    def next_increments(self) -> np.ndarray:
+        """The next block's increments, for a caller that accumulates them itself into
+        `last` (_step.imu_noise_rows)."""
+        return self._src.next_block() * self._sigma
+
+    @property
+    def last(self) -> np.ndarray:
+        """The walk's value now (6,), a view: an accumulating caller updates it in place."""
+        return self._last[0]
 
 
 # From this many IMU samples per physics step on, evenly spaced samples use the rotation
@@ -171,15 +181,18 @@ class ImuModel:
         j = self.injected
         return [row[0] + j[0], row[1] + j[1], row[2] + j[2], row[3], row[4], row[5]]
 
-    def _next_block(self) -> np.ndarray:
-        """Slow biases of the next block of physics steps into _slow; their die
-        temperatures are returned (and kept in _temps for the block path)."""
-        walk = self.walk.next_block()
-        rows = walk.shape[0]
+    def _next_temps(self, rows: int) -> np.ndarray:
+        """Die temperatures of the next `rows` physics steps."""
         s = np.arange(self._steps_done + 1, self._steps_done + rows + 1)
         self._steps_done += rows
-        temps = self.temp_ss_c + (self.temp_0_c - self.temp_ss_c) * np.exp(
+        return self.temp_ss_c + (self.temp_0_c - self.temp_ss_c) * np.exp(
             -s * (self.dt_s / self.temp_tau_s))
+
+    def _next_block(self) -> np.ndarray:
+        """Slow biases of the next block of physics steps into _slow (the block path);
+        their die temperatures are returned and kept in _temps."""
+        walk = self.walk.next_block()
+        temps = self._next_temps(walk.shape[0])
         self._slow = walk + self._turn_on + np.multiply.outer(temps - TEMP_REF_C, self._tempco)
         self._temps = temps.tolist()
         self._pos = 0
@@ -188,9 +201,16 @@ class ImuModel:
     def next_scalar_block(self) -> tuple:
         """The next block for the one-sample-per-step path (the step kernel samples):
         (slow biases + white noise (rows, 6) gyro xyz then accel xyz, die temperature
-        (rows)). The maths of a sample: bridge/src/step_maths.c sb_imu_scalar."""
-        temps = self._next_block()
-        return np.ascontiguousarray(self._slow + self.white.next_block()), temps
+        (rows)). The maths of a sample: bridge/src/step_maths.c sb_imu_scalar. The slow
+        biases are _next_block's, summed in one C pass (bridge/src/imu_noise.h) where
+        numpy took a dozen: the same values, to the bit."""
+        inc = self.walk.next_increments()
+        temps = self._next_temps(inc.shape[0])
+        self._slow = np.empty_like(inc)
+        out = np.empty_like(inc)
+        _step.imu_noise_rows(inc, self.white.next_block(), temps, self._turn_on, self._tempco,
+                             TEMP_REF_C, self.walk.last, self._slow, out)
+        return out, temps
 
     def step_block(self, prev6, cur6, frac_col: np.ndarray, o1, o2, o3, o4,
                    out: np.ndarray) -> None:

@@ -2,7 +2,9 @@
 
 Each model is sampled on the first physics step at or after its due time
 t_m = round(m * 1e9 / rate_hz) ns, m = 1, 2, ... (`Schedule`; the step kernel
-keeps the baro's and magnetometer's schedules in C, the simulator the GNSS's).
+keeps the baro's and magnetometer's schedules in C, and the GNSS's from the second fix on:
+bridge/src/gnss_model.c makes the same fixes, bridge/gnss_kernel.py hands Gnss's state
+over and back).
 Noise comes from one named stream per sensor (noise.NormalRows).
 
 - Baro: static pressure from JSBSim's standard atmosphere (ISA, `atmosphere.py`
@@ -84,7 +86,21 @@ class Gnss:
         self.err_ned_m = None   # Gauss-Markov state, started from its stationary law
         self.last_epoch_ns = 0
         self.pending: deque = deque()
-        self.fault = None       # bridge/faults/gnss.py GnssFault while a GNSS fault is on
+        self._fault = None
+        # Called when the fault changes: the model may have to come back from C to Python,
+        # whatever switched it (the fault engine's schedule, a poll, a script's inject).
+        self.on_fault_change = None
+
+    @property
+    def fault(self):
+        """bridge/faults/gnss.py GnssFault while a GNSS fault is on, else None."""
+        return self._fault
+
+    @fault.setter
+    def fault(self, fault) -> None:
+        self._fault = fault
+        if self.on_fault_change is not None:
+            self.on_fault_change()
 
     def epoch(self, sim_ns: int, lat_rad: float, lon_rad: float, alt_msl_m: float,
               vel_ned_m_s) -> None:

@@ -72,3 +72,17 @@ class NormalRows:
 
     def next_block(self) -> np.ndarray:
         return self.take(self.block_rows)
+
+    def current_block(self) -> tuple[np.ndarray, int]:
+        """(the block the next row comes from, that row's index in it), a fresh block
+        when this one is used up: for a reader in C that takes the rows in place and says
+        afterwards where it stopped (`seek`)."""
+        if self._pos >= self._block.shape[0]:
+            self._refill()
+        return self._block, self._pos
+
+    def seek(self, pos: int) -> None:
+        """The rows of the current block before `pos` were taken elsewhere (current_block)."""
+        if not 0 <= pos <= self._block.shape[0]:
+            raise ValueError(f"row {pos} is outside the block of {self._block.shape[0]} rows")
+        self._pos = pos

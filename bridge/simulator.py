@@ -22,9 +22,10 @@ The hot path is one call into the C step kernel (bridge/src/stepmodule.c; its
 readable Python oracle is tests/bridge/step_kernel_oracle.py, passed as kernel_cls by
 the tests): it sets the PWM, runs JSBSim, reads the FDM sample through the property
 nodes, and its sensor stage (bridge/src/sensor_stage.c) writes the IMU, ground-truth,
-baro and mag records. Python keeps what
-happens at 10 Hz or less or on events (GNSS, setpoints, crash messages, noise
-blocks) and the oversampled IMU block (numpy, imu.py).
+baro and mag records, and from the second fix on the GNSS's (bridge/gnss_kernel.py).
+Python keeps what happens at 10 Hz or less or on events (the first GNSS fix and
+those under a GNSS fault, setpoints, crash messages, noise blocks) and the
+oversampled IMU block (numpy, imu.py).
 """
 
 from __future__ import annotations
@@ -43,6 +44,7 @@ from silbridge.bridge.errors import SimulatorError
 from silbridge.bridge.faults import appliers as fault_appliers
 from silbridge.bridge.faults.engine import FaultEngine
 from silbridge.bridge.fdm import FT_M, LBF_N, PSF_PA, SLUG_KG, Fdm
+from silbridge.bridge.gnss_kernel import KernelGnss
 from silbridge.bridge.frames import quat_from_euler, wrap_pi
 from silbridge.bridge.imu import ImuModel
 from silbridge.bridge.lowrate import Baro, Gnss, Mag
@@ -54,15 +56,18 @@ from silbridge.shm.records import Kind
 from silbridge.shm.records import NS_PER_S as _NS
 
 _FLIP_LIMIT_S = 1.0   # upside down this long in the air counts as a crash
+_NEVER_NS = 2**63 - 1  # next_slow_ns when no slow record is due
 
 
 class Simulator:
     """Parameters: ``imu_hz`` (None: the scenario's rate); ``block_rows`` rows per noise
     block; ``kernel_cls`` the step kernel's class (the C one; tests pass the Python
-    oracle, tests/bridge/step_kernel_oracle.py, which has the same interface)."""
+    oracle, tests/bridge/step_kernel_oracle.py, which has the same interface);
+    ``jsbsim_native`` and ``gnss_in_c``: False keeps JSBSim's nodes, or the GNSS epochs,
+    on their Python path (the same records, slower; for tests and measurements)."""
 
     def __init__(self, scenario, imu_hz: int | None = None, block_rows: int = DEFAULT_BLOCK_ROWS,
-                 kernel_cls=_step.Kernel, jsbsim_native: bool = True):
+                 kernel_cls=_step.Kernel, jsbsim_native: bool = True, gnss_in_c: bool = True):
         sc = scenario
         self.scenario = sc
         self._set_rates(sc, imu_hz)
@@ -91,6 +96,9 @@ class Simulator:
         self._hold_gnss = hasattr(self.kernel, "hold")
         self._held_rec = bytearray(64)
         self._attach_kernel()
+        # The GNSS epochs in C from the second fix on, unless a fault needs Python's model.
+        self._kgnss = KernelGnss(self.gnss, self.kernel, self._seq, self.dt_ns,
+                                 self.fdm.ground_alt_m, gnss_in_c, moved=self._update_next_slow)
         self.esc = self._make_esc(sc)       # [esc] telemetry or None
         self._views = self.buffer._views
         self._prev6 = self._true6()
@@ -255,7 +263,7 @@ class Simulator:
             imu = s[Kind.IMU]
         return {"imu": imu, "gt_att": att, "gt_nav": nav,
                 "baro": baro, "mag": mag,
-                "gnss": s[Kind.GNSS] - (self.kernel.held if self._hold_gnss else 0),
+                "gnss": self._kgnss.records() - (self.kernel.held if self._hold_gnss else 0),
                 "setpoint": s[Kind.SETPOINT],
                 **({"esc": s[Kind.ESC]} if self.esc else {}), "battery": self.battery.reports}
 
@@ -287,7 +295,7 @@ class Simulator:
             count = n + (flags & 0xFF)
         self.step_index = k
         self.sim_ns = k * self.dt_ns
-        if flags & 0xFF00:
+        if flags & ~0xFF:
             count = self._after_step(flags, count)
         return self._views[count]
 
@@ -352,6 +360,8 @@ class Simulator:
             self.kernel.set_baro_block(self.baro.noise.next_block())
         if flags & _step.F_MAG_BLOCK_DONE:
             self.kernel.set_mag_block(self.mag.noise.next_block())
+        if flags & _step.F_GNSS_BLOCK_DONE:
+            self._kgnss.next_block()
         if flags & _step.F_GROUND_CHANGED:
             on_ground = st[_step.ST_ON_GROUND] > 0.0
             self.fdm.set_air_integrator(not on_ground)
@@ -377,7 +387,7 @@ class Simulator:
         st = self._state
         buf = self.buffer
         gnss = self.gnss
-        if sim_ns >= gnss.schedule.next_ns:
+        if not self._kgnss.in_c and sim_ns >= gnss.schedule.next_ns:
             gnss.schedule.advance()
             lat, lon, hagl_m = st[_step.ST_LAT:_step.ST_HAGL + 1].tolist()
             vel = tuple(st[_step.ST_VEL:_step.ST_VEL + 3].tolist())
@@ -391,6 +401,7 @@ class Simulator:
             self._hold_pending()
         if self.faults.pollers:                # a fault following a slow quantity
             self.faults.poll(sim_ns)
+        self._kgnss.place()
         if self.step_index == self.setpoints.next_step:
             _, s_roll, s_pitch, s_yaw, s_alt, mask = self.setpoints.pop()
             sb.SETPOINT.pack_into(buf.buf, count * 64, 8, 0, self._next_seq(8), sim_ns, 0,
@@ -425,15 +436,15 @@ class Simulator:
 
     def _update_next_slow(self) -> None:
         """Tell the kernel the sim time of the next GNSS, setpoint or ESC record (it writes
-        the battery's itself)."""
-        due = [self.gnss.schedule.next_ns]
+        the battery's itself, and the GNSS's while it makes them)."""
+        due = [] if self._kgnss.in_c else [self.gnss.schedule.next_ns]
         if self.gnss.pending:
             due.append(self.gnss.pending[0][0])
         if self.setpoints.next_step > 0:
             due.append(self.setpoints.next_step * self.dt_ns)
         if self.esc is not None:
             due.append(self.esc.schedule.next_ns)
-        self.kernel.next_slow_ns = min(due)
+        self.kernel.next_slow_ns = min(due, default=_NEVER_NS)
 
     def _imu_count(self, k: int) -> int:
         """IMU samples carried by step k (imu.py: (k-1) dt < t_m <= k dt)."""

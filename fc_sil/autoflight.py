@@ -36,7 +36,8 @@ class AutoFlight:
 
     def next_due_ns(self) -> float:
         """When after_batch next acts (fc_loop.py batch_poll): the arming time. The declination
-        waits for a GNSS fix, and GNSS records come in steps Python finishes anyway."""
+        waits for a GNSS fix, and a run's first fix comes in a step Python finishes (the
+        bridge's Python releases it: bridge/gnss_kernel.py), which ends its batch."""
         return self.arm_at_ns if self.armed_at_ns is None else math.inf
 
     def _auto_declination(self) -> None:

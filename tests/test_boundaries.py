@@ -169,7 +169,8 @@ PURE_BLOCKS = {
     "sensor stage": (ROOT / "bridge" / "src" / "sensor_stage.c",
                      (ROOT / "bridge" / "src", ROOT / "shm" / "include"),
                      {"sensor_stage.h", "sb_records.h", "step_maths.h", "vibration.h",
-                      "imu_chip.h", "imu_raw.h", "sensor_faults.h", "battery.h"}),
+                      "imu_chip.h", "imu_raw.h", "sensor_faults.h", "battery.h",
+                      "gnss_model.h"}),
     "control law": (ROOT / "fc_sil" / "core" / "fc_control.c", (ROOT / "fc_sil" / "core",),
                     None),
 }

@@ -140,6 +140,11 @@ const char *sb_sensor_stage_error(long code)
         return "no baro noise: call set_baro_block first";
     case SB_STAGE_NO_MAG_NOISE:
         return "no mag noise: call set_mag_block first";
+    case SB_STAGE_NO_GNSS_NOISE:
+        return "no GNSS noise: call set_gnss_block before the next epoch";
+    case SB_STAGE_GNSS_HELD_FULL:
+        return "GNSS fixes held past SB_HELD_MAX: the C GNSS needs latency_s x rate_hz + 2 "
+               "<= SB_HELD_MAX (gnss_kernel.py takes it only then)";
     default:
         return "unknown sensor stage error";
     }
@@ -398,6 +403,24 @@ static long write_mag(sb_sensor_stage *s, const sb_fdm_sample *in, sb_record *r,
     return flags;
 }
 
+/* The C GNSS's epoch due at sim_ns: its fix made and held to its release (before the held
+ * records are written, so a fix released at its epoch follows the older ones, as Python's
+ * did). Flags, or a negative SB_STAGE_* code. */
+static long gnss_epoch(sb_sensor_stage *s, const sb_fdm_sample *in, const truth_t *t,
+                       int64_t sim_ns)
+{
+    sb_gnss_model *g = &s->gnss;
+    const sb_gnss_truth truth = {in->lat_rad, in->lon_rad, t->hagl_m,
+                                 {t->vel[0], t->vel[1], t->vel[2]}};
+    sb_record r;
+    const int rc = sb_gnss_epoch(g, &truth, sim_ns, &r);
+    if (rc < 0)
+        return SB_STAGE_NO_GNSS_NOISE;
+    if (sb_sensor_stage_hold(s, &r, sim_ns + g->c.latency_ns) < 0)
+        return SB_STAGE_GNSS_HELD_FULL;
+    return rc ? F_GNSS_BLOCK_DONE : 0;
+}
+
 int sb_sensor_stage_hold(sb_sensor_stage *s, const sb_record *r, int64_t due_ns)
 {
     sb_held *h = &s->held;
@@ -454,6 +477,11 @@ long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t s
         f = s->faults.mag_off ? skip_sample(&s->mag, F_MAG_BLOCK_DONE, SB_STAGE_NO_MAG_NOISE)
                               : write_mag(s, in, &slots[slot++], sim_ns);
         if (f < 0)
+            return f;
+        flags |= f;
+    }
+    if (s->gnss.on && sim_ns >= s->gnss.next_ns) {
+        if ((f = gnss_epoch(s, in, &t, sim_ns)) < 0)
             return f;
         flags |= f;
     }

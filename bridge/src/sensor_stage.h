@@ -1,7 +1,8 @@
 /*
  * sensor_stage.h - the bridge's sensor stage in plain C: one FDM sample (what JSBSim
  * holds after a physics step) in, the step's records out (scalar IMU, GT_ATT, GT_NAV,
- * then baro and magnetometer when due, held GNSS fixes, the battery's report), with the
+ * then baro and magnetometer when due, GNSS fixes held to their release (made here at
+ * their epoch while the C model is on, gnss_model.h), the battery's report), with the
  * crash and contact flags Python acts on.
  *
  * No Python and no JSBSim here, as PX4 keeps RateControl free of topics: the CPython
@@ -20,6 +21,7 @@
 #include <stdint.h>
 
 #include "battery.h"
+#include "gnss_model.h"
 #include "imu_chip.h"
 #include "imu_raw.h"
 #include "sb_records.h"
@@ -98,7 +100,7 @@ enum {
 };
 
 /* Returned flags: the low byte is the number of records written. */
-#define F_SLOW_DUE 0x100      /* sim_ns reached next_slow_ns: GNSS/setpoint from Python */
+#define F_SLOW_DUE 0x100      /* sim_ns reached next_slow_ns: setpoint, ESC, GNSS from Python */
 #define F_BLOCK_DONE 0x200    /* IMU noise used up: give the next block before the next step */
 #define F_GROUND_CHANGED 0x400
 #define F_TIPPED 0x800        /* on the ground, tilted past the crash tilt */
@@ -106,13 +108,18 @@ enum {
 #define F_ROTOR_STRIKE 0x2000
 #define F_BARO_BLOCK_DONE 0x4000  /* baro noise used up */
 #define F_MAG_BLOCK_DONE 0x8000   /* mag noise used up */
+#define F_GNSS_BLOCK_DONE 0x10000 /* the C GNSS's noise used up (gnss_model.h) */
+/* The flags that end a step for Python: all but the low byte's record count. */
+#define F_PYTHON_MASK (~0xFFL)
 
 /* Negative returns of sb_sensor_stage_step (sb_sensor_stage_error words them). */
 enum {
     SB_STAGE_NO_IMU_NOISE = -1,
     SB_STAGE_BUFFER_FULL = -2,
     SB_STAGE_NO_BARO_NOISE = -3,
-    SB_STAGE_NO_MAG_NOISE = -4
+    SB_STAGE_NO_MAG_NOISE = -4,
+    SB_STAGE_NO_GNSS_NOISE = -5,
+    SB_STAGE_GNSS_HELD_FULL = -6
 };
 
 /* A 100 Hz sensor the stage samples (lowrate.py documents the models). */
@@ -161,6 +168,7 @@ typedef struct {
     double prev6[6];
     sb_imu_raw raw;           /* the chip's ODR samples for the log, when bound (imu_raw.h) */
     sb_held held;             /* records waiting for their release step */
+    sb_gnss_model gnss;       /* the GNSS's epochs, while gnss.on (else Python's) */
     sb_sensor_faults faults;  /* issue 28's sensor faults (all off: one test per sample) */
     sb_pack pack;             /* the physics-side battery, once configured (battery.h) */
 } sb_sensor_stage;

@@ -249,7 +249,7 @@ static int batch_step(Kernel *self, int last)
     const long flags = sb_step_run_items(self, self->batch.pwm_obj, 0);
     if (flags < 0)
         return -1;
-    if (flags & 0xFF00) {
+    if (flags & F_PYTHON_MASK) {
         io[SB_IO_PENDING] = flags;
         return 0;
     }

@@ -178,4 +178,7 @@ PyGetSetDef sb_step_getset[] = {
      "sim time [ns] from which step flags F_SLOW_DUE", NULL},
     {"pos", (getter)Kernel_get_pos, NULL, "next row of the noise block", NULL},
     {"held", (getter)Kernel_get_held, NULL, "records held for a later step (hold())", NULL},
+    {"gnss_on", (getter)Kernel_get_gnss_on, NULL, "the stage makes the GNSS epochs", NULL},
+    {"gnss_seq", (getter)Kernel_get_gnss_seq, NULL,
+     "the next GNSS record's sequence number, while gnss_on", NULL},
     {NULL, NULL, NULL, NULL, NULL}};

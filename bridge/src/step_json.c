@@ -79,7 +79,7 @@ static int read_step(const sb_record *r, Py_ssize_t n, double t_s, double *v)
 
 /* json_reply(records, sim_ns) -> bytes, or None if a value is not finite (the
  * caller raises: SITL's atof would read NaN as 0 or garbage). */
-static PyObject *json_reply(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+PyObject *sb_step_json_reply(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
 {
     (void)mod;
     if (nargs != 2) {
@@ -127,9 +127,3 @@ static PyObject *json_reply(PyObject *mod, PyObject *const *args, Py_ssize_t nar
     len += 3;
     return PyBytes_FromStringAndSize(line, (Py_ssize_t)len);
 }
-
-PyMethodDef sb_step_json_methods[] = {
-    {"json_reply", (PyCFunction)(void (*)(void))json_reply, METH_FASTCALL,
-     "json_reply(records, sim_ns) -> bytes | None: the ArduPilot SITL JSON state line of a "
-     "step's records (None if a value is not finite)"},
-    {NULL, NULL, 0, NULL}};

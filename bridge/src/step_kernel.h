@@ -74,6 +74,8 @@ typedef struct {
     Py_buffer temps_view;     /* float64 (rows): die temperature per step */
     Py_buffer baro_noise;     /* float64 (rows, 1): the stage reads these buffers */
     Py_buffer mag_noise;      /* float64 (rows, 3) */
+    Py_buffer gnss_noise;     /* float64 (rows, 6): the C GNSS's (step_gnss.c) */
+    int gnss_configured;      /* configure_gnss() was called */
     sb_record *slots;
     Py_ssize_t n_slots;
     sb_sensor_stage stage;
@@ -104,6 +106,14 @@ PyObject *Kernel_run_batch(Kernel *self, PyObject *arg);
 PyObject *Kernel_finish_step(Kernel *self, PyObject *arg);
 void sb_batch_clear(sb_batch *b);
 int sb_batch_traverse(sb_batch *b, visitproc visit, void *arg);
+
+/* step_gnss.c: the C GNSS's methods and attributes (gnss_model.h) */
+PyObject *Kernel_configure_gnss(Kernel *self, PyObject *args, PyObject *kwds);
+PyObject *Kernel_set_gnss_block(Kernel *self, PyObject *args);
+PyObject *Kernel_gnss_take(Kernel *self, PyObject *args);
+PyObject *Kernel_gnss_give(Kernel *self, PyObject *unused);
+PyObject *Kernel_get_gnss_on(Kernel *self, void *closure);
+PyObject *Kernel_get_gnss_seq(Kernel *self, void *closure);
 
 /* step_hash.c: the Blake2b type; its state, or NULL with TypeError if obj is not one */
 extern PyTypeObject SbBlake2bType;
@@ -149,7 +159,9 @@ int sb_step_pack_load(Kernel *self, const double omega_rad_s[4]);
 /* step_native.c: Kernel.bind_native (JSBSim's nodes from C) */
 PyObject *Kernel_bind_native(Kernel *self, PyObject *unused);
 
-/* step_json.c: the module-level json_reply (ArduPilot SITL's JSON state line). */
-extern PyMethodDef sb_step_json_methods[];
+/* The module's functions: json_reply (step_json.c: ArduPilot SITL's JSON state line),
+ * imu_noise_rows (step_imu_noise.c: the IMU's noise rows of a block). */
+PyObject *sb_step_json_reply(PyObject *mod, PyObject *const *args, Py_ssize_t nargs);
+PyObject *sb_step_imu_noise_rows(PyObject *mod, PyObject *args);
 
 #endif /* SB_STEP_KERNEL_H */

@@ -67,6 +67,7 @@ static void Kernel_dealloc(Kernel *self)
     sb_step_release(&self->temps_view);
     sb_step_release(&self->baro_noise);
     sb_step_release(&self->mag_noise);
+    sb_step_release(&self->gnss_noise);
     sb_step_release(&self->raw_view);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
@@ -288,6 +289,15 @@ static PyMethodDef Kernel_methods[] = {
      "set_baro_block((rows, 1) float64 standard normals)"},
     {"set_mag_block", (PyCFunction)Kernel_set_mag_block, METH_O,
      "set_mag_block((rows, 3) float64 standard normals)"},
+    {"configure_gnss", (PyCFunction)(void (*)(void))Kernel_configure_gnss,
+     METH_VARARGS | METH_KEYWORDS, "configure_gnss(*, rate_hz, latency_ns, ...): the C GNSS's "
+     "constants (step_gnss.c)"},
+    {"set_gnss_block", (PyCFunction)Kernel_set_gnss_block, METH_VARARGS,
+     "set_gnss_block((rows, 6) float64 standard normals, pos)"},
+    {"gnss_take", (PyCFunction)Kernel_gnss_take, METH_VARARGS,
+     "gnss_take(m, err_ned_m or None, last_epoch_ns, seq): the stage makes the epochs"},
+    {"gnss_give", (PyCFunction)Kernel_gnss_give, METH_NOARGS,
+     "gnss_give() -> (m, err_ned_m or None, last_epoch_ns, pos, seq): Python makes them"},
     {"hold", (PyCFunction)Kernel_hold, METH_VARARGS,
      "hold(due_ns, record): a 64-byte record written at the first step at or after due_ns"},
     {"set_forces", (PyCFunction)Kernel_set_forces, METH_O,
@@ -355,8 +365,17 @@ static PyTypeObject KernelType = {
     .tp_getset = sb_step_getset,
 };
 
+static PyMethodDef module_methods[] = {
+    {"json_reply", (PyCFunction)(void (*)(void))sb_step_json_reply, METH_FASTCALL,
+     "json_reply(records, sim_ns) -> bytes | None: the ArduPilot SITL JSON state line of a "
+     "step's records (None if a value is not finite)"},
+    {"imu_noise_rows", (PyCFunction)sb_step_imu_noise_rows, METH_VARARGS,
+     "imu_noise_rows(inc, white, temps, turn_on, tempco, temp_ref_c, last, slow, out): the "
+     "IMU's noise rows of a block, as bridge/imu.py's numpy did them (imu_noise.h)"},
+    {NULL, NULL, 0, NULL}};
+
 static struct PyModuleDef stepmodule = {
-    PyModuleDef_HEAD_INIT, "_step", "The bridge's per-step C kernel", -1, sb_step_json_methods,
+    PyModuleDef_HEAD_INIT, "_step", "The bridge's per-step C kernel", -1, module_methods,
     NULL, NULL, NULL, NULL};
 
 /* module.NAME = the names of a table, in its order: what Python's dicts are keyed by. */
@@ -401,6 +420,7 @@ PyMODINIT_FUNC PyInit__step(void)
     }
     struct { const char *name; long v; } ints[] = {
         {"F_SLOW_DUE", F_SLOW_DUE}, {"F_BLOCK_DONE", F_BLOCK_DONE},
+        {"F_GNSS_BLOCK_DONE", F_GNSS_BLOCK_DONE},
         {"F_GROUND_CHANGED", F_GROUND_CHANGED}, {"F_TIPPED", F_TIPPED},
         {"F_FLIPPED", F_FLIPPED}, {"F_ROTOR_STRIKE", F_ROTOR_STRIKE},
         {"F_BARO_BLOCK_DONE", F_BARO_BLOCK_DONE}, {"F_MAG_BLOCK_DONE", F_MAG_BLOCK_DONE},

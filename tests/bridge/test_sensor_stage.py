@@ -44,7 +44,8 @@ def driver(tmp_path_factory):
                     str(src / "sensor_stage.c"), str(src / "sensor_faults.c"),
                     str(src / "step_maths.c"),
                     str(src / "vibration.c"), str(src / "imu_chip.c"),
-                    str(src / "imu_raw.c"), str(src / "battery.c"), "-lm",
+                    str(src / "imu_raw.c"), str(src / "battery.c"),
+                    str(src / "gnss_model.c"), "-lm",
                     "-o", str(exe)], check=True, capture_output=True, text=True)
     return exe
 
