@@ -44,8 +44,8 @@ from silbridge.bridge.errors import SimulatorError
 from silbridge.bridge.faults import appliers as fault_appliers
 from silbridge.bridge.faults.engine import FaultEngine
 from silbridge.bridge.fdm import FT_M, LBF_N, PSF_PA, SLUG_KG, Fdm
-from silbridge.bridge.gnss_kernel import KernelGnss
 from silbridge.bridge.frames import quat_from_euler, wrap_pi
+from silbridge.bridge.gnss_kernel import KernelGnss
 from silbridge.bridge.imu import ImuModel
 from silbridge.bridge.lowrate import Baro, Gnss, Mag
 from silbridge.bridge.noise import DEFAULT_BLOCK_ROWS

@@ -105,14 +105,17 @@ PyObject *Kernel_gnss_give(Kernel *self, PyObject *Py_UNUSED(ignored))
         PyErr_SetString(PyExc_RuntimeError, "gnss_give: the C GNSS is not on (gnss_take)");
         return NULL;
     }
-    g->on = 0;
     PyObject *err = g->have_err ? Py_BuildValue("(ddd)", g->err_ned_m[0], g->err_ned_m[1],
                                                 g->err_ned_m[2])
                                 : Py_NewRef(Py_None);
     if (err == NULL)
         return NULL;
-    return Py_BuildValue("(LNLnk)", (long long)g->m, err, (long long)g->last_epoch_ns,
-                         (Py_ssize_t)g->pos, (unsigned long)g->seq);
+    PyObject *state = Py_BuildValue("(LNLnk)", (long long)g->m, err,
+                                    (long long)g->last_epoch_ns, (Py_ssize_t)g->pos,
+                                    (unsigned long)g->seq);
+    if (state != NULL)   /* the stage stops only once Python has the state to go on with */
+        g->on = 0;
+    return state;
 }
 
 PyObject *Kernel_get_gnss_on(Kernel *self, void *closure)
