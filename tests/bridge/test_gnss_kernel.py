@@ -98,16 +98,17 @@ def test_noise_blocks_run_out_and_are_refilled_in_c():
     assert len(of_kind(c_recs, Kind.GNSS)) > 2 * 1024
 
 
-@pytest.mark.parametrize("latency_s", [0.0, 2.0])
-def test_latencies_the_kernel_cannot_hold_or_holds_for_no_time(latency_s):
-    """2 s at 10 Hz is more fixes in flight than the kernel holds: Python keeps the model.
-    0 s: each fix is released at its own epoch, in C."""
+@pytest.mark.parametrize("latency_s, in_c_expected, fixes", [
+    (0.0, True, 30),      # each fix released at its own epoch, in C (epochs 0.1..3.0 s)
+    (0.65, True, 23),     # seven fixes in flight at once: nearly all the kernel holds
+    (2.0, False, 10),     # twenty in flight, more than it holds: Python keeps the model
+])
+def test_latencies_from_none_to_more_than_the_kernel_holds(latency_s, in_c_expected, fixes):
     c_sim, c_recs, in_c = _fly(3000, True, **{"gnss.latency_s": latency_s})
     _, py_recs, _ = _fly(3000, False, **{"gnss.latency_s": latency_s})
     _same_records(c_recs, py_recs)
-    assert in_c.any() == (latency_s == 0.0)
-    gnss = of_kind(c_recs, Kind.GNSS)
-    assert len(gnss) == (30 if latency_s == 0.0 else 10)   # epochs 0.1..3.0 s, ..1.0 s
+    assert in_c.any() == in_c_expected
+    assert len(of_kind(c_recs, Kind.GNSS)) == fixes
 
 
 def test_the_kernel_refuses_to_take_the_model_unconfigured():
