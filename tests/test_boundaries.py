@@ -170,7 +170,7 @@ PURE_BLOCKS = {
                      (ROOT / "bridge" / "src", ROOT / "shm" / "include"),
                      {"sensor_stage.h", "sb_records.h", "step_maths.h", "vibration.h",
                       "imu_chip.h", "imu_raw.h", "sensor_faults.h", "battery.h",
-                      "gnss_model.h"}),
+                      "gnss_model.h", "lowrate.h"}),
     "control law": (ROOT / "fc_sil" / "core" / "fc_control.c", (ROOT / "fc_sil" / "core",),
                     None),
 }

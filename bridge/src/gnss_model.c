@@ -19,12 +19,6 @@ static int32_t round_i32(double x)
     return (int32_t)nearbyint(x);
 }
 
-static void advance(sb_gnss_model *g)
-{
-    g->m++;
-    g->next_ns = sb_due_ns(g->m, g->c.rate_hz);
-}
-
 /* Gnss.epoch's Gauss-Markov position error: drawn from its stationary law at the first
  * epoch, then a = exp(-dt / tau), err = a err + sqrt(1 - a^2) sigma n. */
 static void update_error(sb_gnss_model *g, const double *n, int64_t sim_ns)
@@ -45,16 +39,15 @@ static void update_error(sb_gnss_model *g, const double *n, int64_t sim_ns)
 
 int sb_gnss_epoch(sb_gnss_model *g, const sb_gnss_truth *t, int64_t sim_ns, sb_record *r)
 {
-    if (g->pos >= g->rows)
+    const double *n = sb_lowrate_take(&g->lr, 6);
+    if (n == NULL)
         return -1;
-    advance(g);
-    const double *n = g->noise + 6 * g->pos++;
     update_error(g, n, sim_ns);
     const sb_gnss_cfg *c = &g->c;
     const double *e = g->err_ned_m;
     memset(r, 0, sizeof *r);
     r->h.kind = SB_KIND_GNSS;
-    r->h.seq = g->seq++;
+    r->h.seq = g->lr.seq++;
     sb_gnss *f = &r->u.gnss;
     f->lat_e7 = round_i32((t->lat_rad + e[0] / c->m_per_rad_lat) * RAD_TO_DEG * 1e7);
     f->lon_e7 = round_i32((t->lon_rad + e[1] / c->m_per_rad_lon) * RAD_TO_DEG * 1e7);
@@ -66,5 +59,5 @@ int sb_gnss_epoch(sb_gnss_model *g, const sb_gnss_truth *t, int64_t sim_ns, sb_r
     f->epv_cm = c->epv_cm;
     f->fix_type = c->fix_type;
     f->satellites = c->satellites;
-    return g->pos >= g->rows ? 1 : 0;
+    return sb_lowrate_spent(&g->lr);
 }

@@ -13,11 +13,12 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "lowrate.h"
 #include "sb_records.h"
 
-/* What a scenario's [gnss] table fixes for the run (lowrate.py Gnss; the units there). */
+/* What a scenario's [gnss] table fixes for the run (lowrate.py Gnss; the units there;
+ * its rate is the schedule's, sb_gnss_model.lr). */
 typedef struct {
-    double rate_hz;
     int64_t latency_ns;
     double sigma_ned_m[3];     /* pos_sigma_h_m, pos_sigma_h_m, pos_sigma_v_m */
     double tau_s;              /* pos_tau_s */
@@ -31,13 +32,11 @@ typedef struct {
 typedef struct {
     int on;                    /* the stage makes the epochs (Python does while 0) */
     sb_gnss_cfg c;
-    int64_t m, next_ns;        /* epoch m is due at next_ns = round(m * 1e9 / rate_hz) */
-    const double *noise;       /* (rows, 6) standard normals: position NED, velocity NED */
-    size_t rows, pos;
+    sb_lowrate lr;             /* on once configured; the epochs' schedule, their noise
+                                * rows (rows, 6: position NED, velocity NED), seq */
     int have_err;              /* the Gauss-Markov error has been drawn (Python: not None) */
     double err_ned_m[3];
     int64_t last_epoch_ns;
-    uint32_t seq;              /* the next GNSS record's sequence number */
 } sb_gnss_model;
 
 /* The true state of an epoch (the step's truth, as the stage leaves it in ST_*). */

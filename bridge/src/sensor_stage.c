@@ -102,24 +102,6 @@ void sb_sensor_stage_init(sb_sensor_stage *s, const sb_stage_consts *c, double *
     }
 }
 
-int sb_lowrate_start(sb_lowrate *lr, double rate_hz)
-{
-    if (!(rate_hz > 0.0))
-        return -1;
-    lr->rate_hz = rate_hz;
-    lr->m = 1;
-    lr->next_ns = sb_due_ns(1, rate_hz);
-    lr->on = 1;
-    return 0;
-}
-
-void sb_lowrate_set_noise(sb_lowrate *lr, const double *noise, size_t rows)
-{
-    lr->noise = noise;
-    lr->rows = rows;
-    lr->pos = 0;
-}
-
 void sb_sensor_stage_set_imu_noise(sb_sensor_stage *s, const double *noise,
                                    const double *temp_c, size_t rows)
 {
@@ -350,11 +332,10 @@ static long contact_and_crash(sb_sensor_stage *s, const sb_fdm_sample *in, const
 static const double *start_sample(sb_lowrate *lr, size_t width, long done_flag,
                                   uint16_t kind, sb_record *r, int64_t sim_ns, long *flags)
 {
-    if (lr->pos >= lr->rows)
+    const double *n = sb_lowrate_take(lr, width);
+    if (n == NULL)
         return NULL;
-    lr->next_ns = sb_due_ns(++lr->m, lr->rate_hz);
-    const double *n = lr->noise + width * lr->pos++;
-    if (lr->pos >= lr->rows)
+    if (sb_lowrate_spent(lr))
         *flags |= done_flag;
     header(r, kind, lr->seq++, sim_ns);
     memset(r->u.raw, 0, sizeof r->u.raw);
@@ -365,11 +346,9 @@ static const double *start_sample(sb_lowrate *lr, size_t width, long done_flag,
  * written, so the stream after the fault is the fault-free run's; no record, no seq. */
 static long skip_sample(sb_lowrate *lr, long done_flag, long no_noise)
 {
-    if (lr->pos >= lr->rows)
+    if (sb_lowrate_take(lr, 0) == NULL)
         return no_noise;
-    lr->next_ns = sb_due_ns(++lr->m, lr->rate_hz);
-    lr->pos++;
-    return lr->pos >= lr->rows ? done_flag : 0;
+    return sb_lowrate_spent(lr) ? done_flag : 0;
 }
 
 static long write_baro(sb_sensor_stage *s, const sb_fdm_sample *in, sb_record *r,
@@ -480,7 +459,7 @@ long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t s
             return f;
         flags |= f;
     }
-    if (s->gnss.on && sim_ns >= s->gnss.next_ns) {
+    if (s->gnss.on && sim_ns >= s->gnss.lr.next_ns) {
         if ((f = gnss_epoch(s, in, &t, sim_ns)) < 0)
             return f;
         flags |= f;

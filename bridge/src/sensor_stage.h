@@ -24,6 +24,7 @@
 #include "gnss_model.h"
 #include "imu_chip.h"
 #include "imu_raw.h"
+#include "lowrate.h"
 #include "sb_records.h"
 #include "sensor_faults.h"
 #include "step_maths.h"
@@ -122,16 +123,6 @@ enum {
     SB_STAGE_GNSS_HELD_FULL = -6
 };
 
-/* A 100 Hz sensor the stage samples (lowrate.py documents the models). */
-typedef struct {
-    int on;                   /* configured */
-    double rate_hz;
-    int64_t m, next_ns;       /* sample m is due at next_ns = round(m * 1e9 / rate_hz) */
-    const double *noise;      /* (rows, width) standard normals, the caller's memory */
-    size_t rows, pos;
-    uint32_t seq;
-} sb_lowrate;
-
 /* Records Python made ahead of their release (a GNSS fix, made at its epoch and released
  * latency_s later): the stage writes each at the first step at or after its due time,
  * after the baro and mag, so that step needs no Python (simulator.py _slow_sensors). */
@@ -178,11 +169,7 @@ void sb_sensor_stage_init(sb_sensor_stage *s, const sb_stage_consts *c, double *
                           const double phase_rad[4], int64_t flip_steps, int scalar_imu,
                           int on_ground);
 
-/* Start the schedule of a low-rate sensor; -1 unless rate_hz > 0. */
-int sb_lowrate_start(sb_lowrate *lr, double rate_hz);
-
-/* The next noise rows of a low-rate sensor (or the IMU: sb_sensor_stage_set_imu_noise). */
-void sb_lowrate_set_noise(sb_lowrate *lr, const double *noise, size_t rows);
+/* The IMU's next noise rows (a low-rate sensor's: lowrate.h sb_lowrate_set_noise). */
 void sb_sensor_stage_set_imu_noise(sb_sensor_stage *s, const double *noise,
                                    const double *temp_c, size_t rows);
 

@@ -53,21 +53,21 @@ PyObject *Kernel_seqs(Kernel *self, PyObject *Py_UNUSED(ignored))
                          (unsigned long)s->mag.seq);
 }
 
-/* Hold a (rows, width) float64 array and point the sensor's noise at it. */
-static int set_noise(sb_lowrate *lr, Py_buffer *held, PyObject *arr, Py_ssize_t width,
-                     const char *what)
+int sb_step_set_noise(sb_lowrate *lr, Py_buffer *held, PyObject *arr, Py_ssize_t width,
+                      Py_ssize_t pos, const char *what)
 {
     Py_buffer v;
     if (sb_step_get_f64(arr, &v, width, 0, what) < 0)
         return -1;
-    if (v.ndim != 2 || v.shape[1] != width) {
-        PyErr_Format(PyExc_ValueError, "%s must be (rows, %zd) float64", what, width);
+    if (v.ndim != 2 || v.shape[1] != width || pos < 0 || pos > v.shape[0]) {
+        PyErr_Format(PyExc_ValueError, "%s must be (rows, %zd) float64, read from a row "
+                                       "0..rows (%zd given)", what, width, pos);
         PyBuffer_Release(&v);
         return -1;
     }
     sb_step_release(held);
     *held = v;
-    sb_lowrate_set_noise(lr, (const double *)v.buf, (size_t)v.shape[0]);
+    sb_lowrate_set_noise(lr, (const double *)v.buf, (size_t)v.shape[0], (size_t)pos);
     return 0;
 }
 
@@ -111,13 +111,13 @@ PyObject *Kernel_configure_mag(Kernel *self, PyObject *args)
 
 PyObject *Kernel_set_baro_block(Kernel *self, PyObject *arr)
 {
-    return set_noise(&self->stage.baro, &self->baro_noise, arr, 1, "baro noise") < 0
+    return sb_step_set_noise(&self->stage.baro, &self->baro_noise, arr, 1, 0, "baro noise") < 0
                ? NULL : Py_NewRef(Py_None);
 }
 
 PyObject *Kernel_set_mag_block(Kernel *self, PyObject *arr)
 {
-    return set_noise(&self->stage.mag, &self->mag_noise, arr, 3, "mag noise") < 0
+    return sb_step_set_noise(&self->stage.mag, &self->mag_noise, arr, 3, 0, "mag noise") < 0
                ? NULL : Py_NewRef(Py_None);
 }
 

@@ -15,15 +15,16 @@ PyObject *Kernel_configure_gnss(Kernel *self, PyObject *args, PyObject *kwds)
                              "m_per_rad_lat", "m_per_rad_lon", "ground_alt_m", "eph_cm",
                              "epv_cm", "fix_type", "satellites", NULL};
     sb_gnss_cfg c;
+    double rate;
     long long latency;
     int eph, epv, fix, sats;
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "$dL(ddd)dddddiiii", kwlist, &c.rate_hz,
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "$dL(ddd)dddddiiii", kwlist, &rate,
                                      &latency, &c.sigma_ned_m[0], &c.sigma_ned_m[1],
                                      &c.sigma_ned_m[2], &c.tau_s, &c.vel_sigma_m_s,
                                      &c.m_per_rad_lat, &c.m_per_rad_lon, &c.ground_alt_m, &eph,
                                      &epv, &fix, &sats))
         return NULL;
-    if (!(c.rate_hz > 0.0) || !(c.tau_s > 0.0) || latency < 0 || eph < 0 || eph > 65535 ||
+    if (!(rate > 0.0) || !(c.tau_s > 0.0) || latency < 0 || eph < 0 || eph > 65535 ||
         epv < 0 || epv > 65535 || fix < 0 || fix > 255 || sats < 0 || sats > 255) {
         PyErr_SetString(PyExc_ValueError, "configure_gnss: rate_hz, tau_s > 0, latency_ns >= 0, "
                                           "eph_cm, epv_cm 0..65535, fix_type, satellites 0..255");
@@ -37,7 +38,7 @@ PyObject *Kernel_configure_gnss(Kernel *self, PyObject *args, PyObject *kwds)
     sb_gnss_model *g = &self->stage.gnss;
     memset(g, 0, sizeof *g);
     g->c = c;
-    self->gnss_configured = 1;
+    sb_lowrate_start(&g->lr, rate);
     Py_RETURN_NONE;
 }
 
@@ -49,22 +50,8 @@ PyObject *Kernel_set_gnss_block(Kernel *self, PyObject *args)
     Py_ssize_t pos;
     if (!PyArg_ParseTuple(args, "On", &arr, &pos))
         return NULL;
-    Py_buffer v;
-    if (sb_step_get_f64(arr, &v, 6, 0, "GNSS noise") < 0)
-        return NULL;
-    if (v.ndim != 2 || v.shape[1] != 6 || pos < 0 || pos > v.shape[0]) {
-        PyErr_SetString(PyExc_ValueError, "set_gnss_block: a (rows, 6) float64 block and "
-                                          "0 <= pos <= rows");
-        PyBuffer_Release(&v);
-        return NULL;
-    }
-    sb_step_release(&self->gnss_noise);
-    self->gnss_noise = v;
-    sb_gnss_model *g = &self->stage.gnss;
-    g->noise = (const double *)v.buf;
-    g->rows = (size_t)v.shape[0];
-    g->pos = (size_t)pos;
-    Py_RETURN_NONE;
+    return sb_step_set_noise(&self->stage.gnss.lr, &self->gnss_noise, arr, 6, pos,
+                             "GNSS noise") < 0 ? NULL : Py_NewRef(Py_None);
 }
 
 /* gnss_take(m, err_ned_m or None, last_epoch_ns, seq): the stage makes the epochs from
@@ -77,7 +64,7 @@ PyObject *Kernel_gnss_take(Kernel *self, PyObject *args)
     if (!PyArg_ParseTuple(args, "LOLk", &m, &err, &last, &seq))
         return NULL;
     sb_gnss_model *g = &self->stage.gnss;
-    if (!self->gnss_configured || g->noise == NULL || m < 1) {
+    if (!g->lr.on || g->lr.noise == NULL || m < 1) {
         PyErr_SetString(PyExc_RuntimeError, "gnss_take: configure_gnss and set_gnss_block "
                                             "first, and m >= 1");
         return NULL;
@@ -86,12 +73,12 @@ PyObject *Kernel_gnss_take(Kernel *self, PyObject *args)
     const int have = err != Py_None;
     if (have && !PyArg_ParseTuple(err, "ddd", &e[0], &e[1], &e[2]))
         return NULL;
-    g->m = m;
-    g->next_ns = sb_due_ns(m, g->c.rate_hz);
+    g->lr.m = m;
+    g->lr.next_ns = sb_due_ns(m, g->lr.rate_hz);
     g->have_err = have;
     memcpy(g->err_ned_m, e, sizeof e);
     g->last_epoch_ns = last;
-    g->seq = (uint32_t)seq;
+    g->lr.seq = (uint32_t)seq;
     g->on = 1;
     Py_RETURN_NONE;
 }
@@ -110,9 +97,9 @@ PyObject *Kernel_gnss_give(Kernel *self, PyObject *Py_UNUSED(ignored))
                                 : Py_NewRef(Py_None);
     if (err == NULL)
         return NULL;
-    PyObject *state = Py_BuildValue("(LNLnk)", (long long)g->m, err,
-                                    (long long)g->last_epoch_ns, (Py_ssize_t)g->pos,
-                                    (unsigned long)g->seq);
+    PyObject *state = Py_BuildValue("(LNLnk)", (long long)g->lr.m, err,
+                                    (long long)g->last_epoch_ns, (Py_ssize_t)g->lr.pos,
+                                    (unsigned long)g->lr.seq);
     if (state != NULL)   /* the stage stops only once Python has the state to go on with */
         g->on = 0;
     return state;
@@ -127,5 +114,5 @@ PyObject *Kernel_get_gnss_on(Kernel *self, void *closure)
 PyObject *Kernel_get_gnss_seq(Kernel *self, void *closure)
 {
     (void)closure;
-    return PyLong_FromUnsignedLong(self->stage.gnss.seq);
+    return PyLong_FromUnsignedLong(self->stage.gnss.lr.seq);
 }

@@ -75,7 +75,6 @@ typedef struct {
     Py_buffer baro_noise;     /* float64 (rows, 1): the stage reads these buffers */
     Py_buffer mag_noise;      /* float64 (rows, 3) */
     Py_buffer gnss_noise;     /* float64 (rows, 6): the C GNSS's (step_gnss.c) */
-    int gnss_configured;      /* configure_gnss() was called */
     sb_record *slots;
     Py_ssize_t n_slots;
     sb_sensor_stage stage;
@@ -128,6 +127,10 @@ PyObject *Kernel_configure_baro(Kernel *self, PyObject *args);
 PyObject *Kernel_configure_mag(Kernel *self, PyObject *args);
 PyObject *Kernel_set_baro_block(Kernel *self, PyObject *arr);
 PyObject *Kernel_set_mag_block(Kernel *self, PyObject *arr);
+/* Hold a (rows, width) float64 array in *held and point a low-rate sensor's noise at it,
+ * read from row pos on; -1 with ValueError for another shape or a pos outside 0..rows. */
+int sb_step_set_noise(sb_lowrate *lr, Py_buffer *held, PyObject *arr, Py_ssize_t width,
+                      Py_ssize_t pos, const char *what);
 PyObject *Kernel_hold(Kernel *self, PyObject *args);
 extern PyGetSetDef sb_step_getset[];
 

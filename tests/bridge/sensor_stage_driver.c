@@ -81,8 +81,8 @@ int main(int argc, char **argv)
     memcpy(s.mag_field_ned_gauss, &mag[1], sizeof s.mag_field_ned_gauss);
     memcpy(s.mag_offset_gauss, &mag[4], sizeof s.mag_offset_gauss);
     s.mag_noise_gauss = mag[7];
-    sb_lowrate_set_noise(&s.baro, &baro_noise, 1);
-    sb_lowrate_set_noise(&s.mag, mag_noise, 1);
+    sb_lowrate_set_noise(&s.baro, &baro_noise, 1, 0);
+    sb_lowrate_set_noise(&s.mag, mag_noise, 1, 0);
     s.next_slow_ns = (int64_t)x[1];
     sb_record slots[8];
     memset(slots, 0, sizeof slots);

@@ -45,7 +45,7 @@ def driver(tmp_path_factory):
                     str(src / "step_maths.c"),
                     str(src / "vibration.c"), str(src / "imu_chip.c"),
                     str(src / "imu_raw.c"), str(src / "battery.c"),
-                    str(src / "gnss_model.c"), "-lm",
+                    str(src / "gnss_model.c"), str(src / "lowrate.c"), "-lm",
                     "-o", str(exe)], check=True, capture_output=True, text=True)
     return exe
 
