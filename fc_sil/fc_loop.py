@@ -52,13 +52,16 @@ class _Series:
 
     Its count lives in a slot of the loop's counter array (words[index]), which the C
     poll updates too. A memoryview over a numpy array: storing a Python int through it
-    costs ~30 ns against ~90 ns for a numpy element. The pages are touched once here
-    (a few ms): np.zeros maps them lazily, and a real-time session then grew by the
-    store's 8 MB over its first half hour, which the soak benchmark reads as a leak."""
+    costs ~30 ns against ~90 ns for a numpy element. With `touch` the pages are touched
+    once here: np.zeros maps them lazily, and a real-time session then grew by the
+    store's 8 MB over its first half hour, which the soak benchmark reads as a leak. A
+    flight that ends by itself leaves them lazy: touching the three stores took ~60 ms
+    of a bench run's ~250 ms outside its flight, where its 120,000 samples touch 1 MB."""
 
-    def __init__(self, words, index: int, cap: int = 1 << 20):
+    def __init__(self, words, index: int, cap: int = 1 << 20, touch: bool = True):
         self.arr = np.zeros(cap, dtype=np.int64)    # the C poll writes here too
-        self.arr.fill(0)
+        if touch:
+            self.arr.fill(0)
         self.buf = memoryview(self.arr)
         self.mask = cap - 1
         self._words, self._index = words, index
@@ -133,7 +136,7 @@ class FcLoop:
     poll: Callable[[], int]
 
     def __init__(self, core, transport: FcTransport, *, supervisor=None, sink=None,
-                 batch: int = 8192, schedule=None):
+                 batch: int = 8192, schedule=None, bounded: bool = False):
         self.core = core
         self.seg = transport
         self.supervisor = supervisor
@@ -158,9 +161,11 @@ class FcLoop:
         # Counters (_IO_* slots) shared by both polls; the C poll writes them in place.
         self._io = np.zeros(_IO_WORDS, dtype=np.int64)
         self._iow = memoryview(self._io)
-        self.latency_ns = _Series(self._iow, _IO_N_LATENCY)
-        self.period_ns = _Series(self._iow, _IO_N_PERIOD)
-        self.e2e_ns = _Series(self._iow, _IO_N_E2E)
+        # bounded: the flight ends by itself (a lockstep run of a set duration), so its
+        # statistics' stores need not be touched up front (_Series).
+        self.latency_ns = _Series(self._iow, _IO_N_LATENCY, touch=not bounded)
+        self.period_ns = _Series(self._iow, _IO_N_PERIOD, touch=not bounded)
+        self.e2e_ns = _Series(self._iow, _IO_N_E2E, touch=not bounded)
         self._prev_consume = 0
         self._sink = self._tick = self._flush = self._fc_batch = None
         self._flush_in = 0

@@ -122,3 +122,30 @@ def test_both_fc_links_present_the_fc_transport_surface():
     with Segment.create("pollio-surface"), Segment.attach("pollio-surface") as fc_seg:
         assert fc_seg.c_capsule() is not None
         assert fc_seg.sensors.wait(0.0, yield_s=1e-4) is False
+
+
+def _rss_bytes() -> int:
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * 4096
+
+
+@pytest.mark.parametrize("bounded", [False, True])
+def test_the_statistics_stores_are_touched_up_front_only_for_open_ended_sessions(bounded):
+    """A real-time session's three 8 MB stores are resident from the start (its RSS stays
+    flat: the soak benchmark reads growth as a leak); a flight that ends by itself leaves
+    them to be touched by the samples it takes, and keeps the same statistics."""
+    name = f"sbt-touch-{int(bounded)}"
+    with Segment.create(name) as seg, Segment.attach(name) as fc_seg:
+        before = _rss_bytes()
+        loop = FcLoop(FlightCore(), fc_seg, bounded=bounded)
+        grown = _rss_bytes() - before
+        store = 3 * loop.latency_ns.arr.nbytes
+        if bounded:
+            assert grown < store / 4
+        else:
+            assert grown > store * 0.9
+        sim = Simulator(load_scenario("S1"))
+        for _ in range(50):
+            seg.sensors.push_batch(sim.step((1000.0,) * 4))
+            loop.poll()
+        assert loop.latency_ns.n == 50 and len(loop.latency_ns.values()) == 50

@@ -82,7 +82,8 @@ def bridge_config(opts: FlightOptions, sc) -> BridgeRunConfig:
 
 
 def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
-                 mavlink=None, out=None, param_events=(), param_file: str | None = None):
+                 mavlink=None, out=None, param_events=(), param_file: str | None = None,
+                 bounded: bool = False):
     """The FC side: FlightCore with parameters applied, wrapped in an FcLoop.
 
     Parameters: the declared defaults, then param_file (--params, read-only), then params
@@ -93,7 +94,9 @@ def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
 
     mavlink: None for the pre-MAVLink AutoFlight (scenario setpoints, auto-arm), or a
     fc_sil.vehicle_server.MavlinkOptions: the MAVLink vehicle (disarmed, GCS control only);
-    close it with close_fc_loop(loop)."""
+    close it with close_fc_loop(loop).
+
+    bounded: the flight ends by itself, in lockstep (fc_sil/fc_loop.py FcLoop)."""
     from silbridge.fc_sil.autoflight import AutoFlight
     from silbridge.fc_sil.flight_core import FlightCore
     from silbridge.fc_sil.param_schedule import ParamSchedule
@@ -109,7 +112,8 @@ def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
         # through the vehicle's store, which its host parameters (SIM_*, the FC-side
         # [[failure]] switches: fc_param_events.py) are read from
         schedule = ParamSchedule(vehicle.store, param_events) if param_events else None
-        return FcLoop(core, seg, supervisor=vehicle, sink=sink, schedule=schedule)
+        return FcLoop(core, seg, supervisor=vehicle, sink=sink, schedule=schedule,
+                      bounded=bounded)
     if param_file:
         from silbridge.fc_sil.vehicle_server import load_start_params
         _, problems = load_start_params(core, param_file)
@@ -118,7 +122,7 @@ def make_fc_loop(seg, *, params: dict | None = None, features_off=(), sink=None,
     for name, value in overrides.items():
         core.set_param(name, value)
     return FcLoop(core, seg, supervisor=AutoFlight(core, sink=sink), sink=sink,
-                  schedule=schedule)
+                  schedule=schedule, bounded=bounded)
 
 
 def mavlink_options(opts: FlightOptions):
@@ -193,7 +197,8 @@ def fly_one_process(opts: FlightOptions, out=print) -> dict:
         with fc_segment(opts.transport, name, hil_addr=fc_addr, wait_config=False) as fc_seg:
             fc = make_fc_loop(fc_seg, params=opts.params, features_off=opts.features_off,
                               mavlink=mavlink_options(opts), out=out,
-                              param_events=param_events(sc), param_file=opts.param_file)
+                              param_events=param_events(sc), param_file=opts.param_file,
+                              bounded=opts.lockstep and math.isfinite(cfg.duration_s))
             guard_fc(fc)
             if opts.log_path or opts.live is not None:
                 from silbridge.tools.loop.run_log import open_run_sink

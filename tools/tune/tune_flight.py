@@ -112,7 +112,7 @@ def fly_captured(spec: CaptureSpec) -> FlightCapture:
     with bridge_segment("shm", opts.instance, sim, default_port=0) as seg:
         prepare_segment(seg, sim, cfg)
         with fc_segment("shm", opts.instance, wait_config=False) as fc_seg:
-            fc = make_fc_loop(fc_seg, params=opts.params)
+            fc = make_fc_loop(fc_seg, params=opts.params, bounded=True)
             guard_fc(fc)
             cap = _Capture(fc.supervisor, fc.core, sim, spec)
             fc.supervisor = cap
