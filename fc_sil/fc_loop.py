@@ -55,8 +55,9 @@ class _Series:
     costs ~30 ns against ~90 ns for a numpy element. With `touch` the pages are touched
     once here: np.zeros maps them lazily, and a real-time session then grew by the
     store's 8 MB over its first half hour, which the soak benchmark reads as a leak. A
-    flight that ends by itself leaves them lazy: touching the three stores took ~60 ms
-    of a bench run's ~250 ms outside its flight, where its 120,000 samples touch 1 MB."""
+    flight that ends by itself leaves them lazy, its 120,000 samples touching 1 MB: a
+    bench worker's loop took ~6 ms to start with the three stores touched, and 55-85 ms
+    for one run in three, whose stores the allocator mapped afresh."""
 
     def __init__(self, words, index: int, cap: int = 1 << 20, touch: bool = True):
         self.arr = np.zeros(cap, dtype=np.int64)    # the C poll writes here too
