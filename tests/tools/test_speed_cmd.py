@@ -127,7 +127,11 @@ def test_the_campaign_flies_every_scenario_and_compares_with_its_single_runs(res
         assert r["run_realtime_factor"] > 0
         assert c["single_run_x"] == single
         assert c["of_single_run"] == pytest.approx(r["realtime_factor"] / single)
+        # the workers' share of time in flight, and each run's time around its flight
+        assert 0.0 < c["flying"] == r["flying"] <= 1.0
+        assert c["outside_flight_s"] == r["outside_flight_s"] > 0.0
     lines: list[str] = []
     print_report(result, out=lines.append)
     assert any("x a single run" in line and line.startswith("campaign, 4 runs, --jobs 2")
+               and "workers flying" in line and "ms a run outside its flight" in line
                for line in lines)

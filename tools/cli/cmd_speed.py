@@ -82,7 +82,9 @@ def print_report(res: dict, out=print) -> None:
         if name in res["cases"]:
             c = res["cases"][name]
             out(f"{c['label']:<34} {c['of_single_run']:.2f}x a single run "
-                f"({c['single_run_x']:.1f}x: the 1-job campaign's runs, median)")
+                f"({c['single_run_x']:.1f}x: the 1-job campaign's runs, median); workers "
+                f"flying {100 * c['flying']:.0f} % of the time, "
+                f"{1e3 * c['outside_flight_s']:.0f} ms a run outside its flight")
     for name, why in res["skipped"].items():
         out(f"{name}: skipped: {why}")
     for name in res["order"]:

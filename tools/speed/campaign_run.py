@@ -30,10 +30,17 @@ def main() -> None:
         res = run_campaign(specs, jobs=a.jobs, progress=False)
         wall_s = time.monotonic() - t0
     sim_s = sum(r.summary["sim_s"] for r in res)
+    # Where the workers' time goes besides flying: each run's set-up and its log read back,
+    # checked and scored (its wall time less its flight's), the workers' start and the end
+    # of the campaign when fewer runs than workers are left.
+    flight_s = [r.summary["sim_s"] / r.summary["realtime_factor"] for r in res]
     print(json.dumps({"jobs": a.jobs, "runs": len(res), "sim_s": sim_s, "wall_s": wall_s,
                       "realtime_factor": sim_s / wall_s,
                       "run_realtime_factor": statistics.median(
-                          r.summary["realtime_factor"] for r in res)}))
+                          r.summary["realtime_factor"] for r in res),
+                      "flying": sum(flight_s) / (min(a.jobs, len(res)) * wall_s),
+                      "outside_flight_s": statistics.median(
+                          r.wall_s - f for r, f in zip(res, flight_s))}))
 
 
 if __name__ == "__main__":      # spawn workers import this file again: only the parent runs

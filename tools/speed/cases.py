@@ -106,6 +106,7 @@ def campaign(duration_s: float, jobs: int, runs_per_scenario: int) -> Case:
     def run() -> dict:
         r = _child(argv, f"the campaign on {jobs} job(s)")
         return {"realtime_factor": r["realtime_factor"], "loop_cpu_s": None,
-                "sim_s": r["sim_s"], "run_realtime_factor": r["run_realtime_factor"]}
+                "sim_s": r["sim_s"], "run_realtime_factor": r["run_realtime_factor"],
+                "flying": r["flying"], "outside_flight_s": r["outside_flight_s"]}
     return Case(f"campaign{jobs}", f"campaign, {4 * runs_per_scenario} runs, --jobs {jobs}",
                 run)

@@ -94,3 +94,6 @@ def add_campaign(cases: dict[str, dict]) -> None:
         c = cases[name]
         c["single_run_x"] = single
         c["of_single_run"] = c["realtime_factor"]["median"] / single
+        # what keeps it from jobs x a single run besides the runs slowing each other
+        c["flying"] = statistics.median(r["flying"] for r in c["runs"])
+        c["outside_flight_s"] = statistics.median(r["outside_flight_s"] for r in c["runs"])
