@@ -55,3 +55,53 @@ def test_bad_digest_size_and_input_are_refused():
         _step.Blake2b(digest_size=65)
     with pytest.raises(TypeError):
         _step.Blake2b().update("text is not bytes")
+
+
+def test_a_hash_fed_on_its_thread_is_hashlibs():
+    """update_later on the thread, interleaved with update and digests (each waits for the
+    job before), two buffers in turn as the one-process loop uses them: hashlib's digest."""
+    rng = np.random.default_rng(7)
+    ours, ref = _step.Blake2b(digest_size=16), hashlib.blake2b(digest_size=16)
+    assert ours.start_thread() is True
+    assert ours.start_thread() is True          # a second start keeps the one thread
+    bufs = [np.zeros(300_000, dtype=np.uint8) for _ in range(2)]
+    for i in range(60):
+        buf = bufs[i % 2]
+        n = int(rng.integers(0, len(buf)))
+        buf[:n] = rng.integers(0, 256, n, dtype=np.uint8)
+        ours.update_later(memoryview(buf)[:n])
+        ref.update(buf[:n].tobytes())
+        if i % 7 == 3:
+            small = rng.integers(0, 256, 77, dtype=np.uint8).tobytes()
+            ours.update(small)
+            ref.update(small)
+        if i % 11 == 5:
+            assert ours.hexdigest() == ref.hexdigest(), i
+    assert ours.digest() == ref.digest()
+
+
+def test_update_later_without_a_thread_hashes_at_once():
+    ours, ref = _step.Blake2b(digest_size=16), hashlib.blake2b(digest_size=16)
+    buf = bytearray(b"x" * 1000)
+    ours.update_later(buf)
+    buf[:] = b"y" * 1000           # no thread: the bytes were taken already
+    ref.update(b"x" * 1000)
+    assert ours.hexdigest() == ref.hexdigest()
+
+
+def _os_threads() -> int:
+    with open("/proc/self/status") as f:
+        return int(next(line for line in f if line.startswith("Threads:")).split()[1])
+
+
+def test_a_threaded_hash_let_go_mid_job_stops_cleanly():
+    """Dropped with a job pending (a run stopped between batches): the job finishes, the
+    thread is joined, none is left behind."""
+    before = _os_threads()
+    for _ in range(20):
+        h = _step.Blake2b(digest_size=16)
+        assert h.start_thread()
+        h.update_later(np.ones(2_000_000, dtype=np.uint8))
+        assert _os_threads() == before + 1
+        del h
+    assert _os_threads() == before

@@ -4,42 +4,48 @@ import pytest
 
 from silbridge.tools.speed import clock_budget as cb
 
-# `perf script -F pid,time,ip,sym,dso` of five samples: startup, then the bridge (pid 10)
-# in JSBSim, in a getter, in Python between batches, and the FC (pid 11) waiting.
+# `perf script -F pid,tid,time,ip,sym,dso` of seven samples: startup, then the bridge's loop
+# (pid 10, thread 10) in JSBSim, in a getter, in Python between batches, its trace hash's
+# thread (10/12), and the FC (pid 11) waiting.
 SCRIPT = """\
-   10 100.000000:
+   10/10 100.000000:
 \t    1111 _PyEval_EvalFrameDefault (/usr/lib/libpython3.11.so)
 \t    2222 main (/usr/bin/python3.11)
 
-   10 100.100000:
+   10/10 100.100000:
 \t    3333 JSBSim::FGPropagate::Run (/x/_jsbsim.so)
 \t    4444 JSBSim::FGFDMExec::Run (/x/_jsbsim.so)
 \t    5555 sb_step_run_items (/x/_step.so)
 \t    6666 Kernel_run_batch (/x/_step.so)
 
-   10 100.200000:
+   10/10 100.200000:
 \t    7777 SGPropertyNode::getDoubleValue (/x/_jsbsim.so)
 \t    8888 sb_call0 (inlined)
 \t    5555 sb_step_run_items (/x/_step.so)
 \t    6666 Kernel_run_batch (/x/_step.so)
 
-   11 100.250000:
+   11/11 100.250000:
 \t    9999 records_ready (inlined)
 \t    aaaa sb_handoff_wait (/x/_shm.so)
 
-   10 100.300000:
+   10/10 100.300000:
 \t    bbbb _PyEval_EvalFrameDefault (/usr/lib/libpython3.11.so)
 
-   10 100.400000:
+   10/12 100.350000:
+\t    cccc compress (/x/_step.so)
+\t    dddd sb_blake2b_update (/x/_step.so)
+
+   10/10 100.400000:
 \t    6666 Kernel_run_batch (/x/_step.so)
 """
 
 
 def test_samples_parse_with_their_stacks():
     s = cb.parse_samples(SCRIPT)
-    assert [(p, t) for p, t, _ in s] == [(10, 100.0), (10, 100.1), (10, 100.2), (11, 100.25),
-                                         (10, 100.3), (10, 100.4)]
-    assert s[1][2][:2] == ["JSBSim::FGPropagate::Run", "JSBSim::FGFDMExec::Run"]
+    assert [(p, tid, t) for p, tid, t, _ in s] == [
+        (10, 10, 100.0), (10, 10, 100.1), (10, 10, 100.2), (11, 11, 100.25), (10, 10, 100.3),
+        (10, 12, 100.35), (10, 10, 100.4)]
+    assert s[1][3][:2] == ["JSBSim::FGPropagate::Run", "JSBSim::FGFDMExec::Run"]
 
 
 def test_each_sample_goes_to_its_part():
@@ -64,11 +70,13 @@ def test_the_budget_counts_the_loop_only():
     assert r["bridge"]["JSBSim getters and setters"] == 0.25
     assert r["bridge"]["Python between batches"] == 0.25
     assert r["fc_samples"] == 1 and r["fc"]["waiting for the bridge"] == 1.0
+    # the trace hash on its own thread is the bridge's, beside its loop: not a part, not FC
+    assert r["beside_loop_samples"] == 1 and r["bridge"]["trace hash"] == 0.0
 
 
 def test_no_batch_sample_is_a_clear_error():
     with pytest.raises(cb.ClockBudgetError, match="no sample inside the lockstep batch"):
-        cb.budget(cb.parse_samples(SCRIPT.split("   10 100.100000:")[0]))
+        cb.budget(cb.parse_samples(SCRIPT.split("   10/10 100.100000:")[0]))
 
 
 def _perf_can_sample() -> bool:

@@ -6,9 +6,10 @@ to what the clock sees: cache misses, a bridge waiting for its FC, Python's low 
 per cycle. A sampling profile is the clock's own account. `perf record -e cpu-clock` (a
 software event: it works in a VM without hardware counters) samples every process of the
 flight with its stack (DWARF unwinding: our extensions and the wheels keep no frame pointers);
-the samples of the lockstep loop, the span between the first and the last sample inside
-`Kernel.run_batch`, are counted by part (`PARTS`, first match wins). In two processes the
-FC's process is reported on its own: how much of its time it computes, how much it waits.
+the samples of the lockstep loop's thread, the span between the first and the last sample
+inside `Kernel.run_batch`, are counted by part (`PARTS`, first match wins). In two processes
+the FC's process is reported on its own: how much of its time it computes, how much it waits;
+the bridge's other threads (the trace hash's, in one process) are counted beside the loop.
 
     python -m silbridge.tools.speed.clock_budget [--processes 1|2] [--duration S] [--json]
 
@@ -55,10 +56,11 @@ class ClockBudgetError(Exception):
     user_facing = True
 
 
-def parse_samples(text: str) -> list[tuple[int, float, list[str]]]:
-    """`perf script -F pid,time,ip,sym,dso` -> [(pid, time_s, [symbol, ... outward])]."""
+def parse_samples(text: str) -> list[tuple[int, int, float, list[str]]]:
+    """`perf script -F pid,tid,time,ip,sym,dso` -> [(pid, tid, time_s, [symbol, ...
+    outward])]."""
     samples, cur = [], None
-    head = re.compile(r"\s*(\d+)\s+([\d.]+):\s*(.*)$")
+    head = re.compile(r"\s*(\d+)/(\d+)\s+([\d.]+):\s*(.*)$")
     frame = re.compile(r"\s*[0-9a-f]+ (.*) \(.*\)$")
     for line in text.splitlines():
         if not line.strip():
@@ -68,14 +70,14 @@ def parse_samples(text: str) -> list[tuple[int, float, list[str]]]:
             continue
         m = head.match(line)
         if m and cur is None:
-            cur = (int(m.group(1)), float(m.group(2)), [])
-            rest = frame.match(m.group(3))
+            cur = (int(m.group(1)), int(m.group(2)), float(m.group(3)), [])
+            rest = frame.match(m.group(4))
             if rest:
-                cur[2].append(rest.group(1))
+                cur[3].append(rest.group(1))
             continue
         m = frame.match(line)
         if m and cur is not None:
-            cur[2].append(m.group(1))
+            cur[3].append(m.group(1))
     if cur is not None:
         samples.append(cur)
     return samples
@@ -92,20 +94,23 @@ def part_of(stack: list[str]) -> str:
     return "Python between batches"
 
 
-def budget(samples: list[tuple[int, float, list[str]]]) -> dict:
-    """Shares of the loop's samples per part, for the bridge and (two processes) the FC."""
-    marked = [(p, t) for p, t, s in samples if any(f.startswith(LOOP_MARK) for f in s)]
+def budget(samples: list[tuple[int, int, float, list[str]]]) -> dict:
+    """Shares of the loop thread's samples per part, for the bridge and (two processes) the
+    FC; the bridge's other threads as a count beside the loop's."""
+    marked = [((p, tid), t) for p, tid, t, s in samples
+              if any(f.startswith(LOOP_MARK) for f in s)]
     if not marked:
         raise ClockBudgetError("no sample inside the lockstep batch: did the flight run? "
                                "(perf may have lost its stacks: try a longer --duration)")
-    bridge = Counter(p for p, _ in marked).most_common(1)[0][0]
+    bridge, loop_tid = Counter(k for k, _ in marked).most_common(1)[0][0]
     t0, t1 = min(t for _, t in marked), max(t for _, t in marked)
-    loop = [(p, s) for p, t, s in samples if t0 <= t <= t1]
-    parts = Counter(part_of(s) for p, s in loop if p == bridge)
+    loop = [(p, tid, s) for p, tid, t, s in samples if t0 <= t <= t1]
+    parts = Counter(part_of(s) for p, tid, s in loop if (p, tid) == (bridge, loop_tid))
     total = sum(parts.values())
-    out = {"loop_s": t1 - t0, "bridge_samples": total,
+    beside = sum(1 for p, tid, _ in loop if p == bridge and tid != loop_tid)
+    out = {"loop_s": t1 - t0, "bridge_samples": total, "beside_loop_samples": beside,
            "bridge": {name: parts.get(name, 0) / total for name, _, _ in PARTS}}
-    others = [s for p, s in loop if p != bridge]
+    others = [s for p, _, s in loop if p != bridge]
     if others:
         waiting = sum(1 for s in others if any(w in f for f in s for w in FC_WAIT))
         out["fc_samples"] = len(others)
@@ -141,7 +146,7 @@ def measure(processes: int, duration_s: float, scenario: str = "S1") -> dict:
             tail = (done.stderr.strip().splitlines() or ["no output"])[-1]
             raise ClockBudgetError(f"the flight under perf failed ({tail}); run it alone: "
                                    f"{' '.join(fly[2:])}")
-        script = subprocess.run([perf, "script", "-i", data, "-F", "pid,time,ip,sym,dso"],
+        script = subprocess.run([perf, "script", "-i", data, "-F", "pid,tid,time,ip,sym,dso"],
                                 capture_output=True, text=True)
     out = budget(parse_samples(script.stdout))
     out.update(processes=processes, scenario=scenario, duration_s=duration_s,
@@ -157,6 +162,10 @@ def _print(r: dict) -> None:
     for name, share in r["bridge"].items():
         if share > 0:
             print(f"  {name:32s} {100 * share:5.1f} %")
+    if r["beside_loop_samples"]:
+        print(f"the bridge's other threads (the trace hash's): {r['beside_loop_samples']} "
+              f"samples, {100 * r['beside_loop_samples'] / r['bridge_samples']:.1f} % of the "
+              f"loop's")
     if "fc" in r:
         print(f"the FC's process ({r['fc_samples']} samples): computing "
               f"{100 * r['fc']['computing']:.1f} %, waiting for the bridge "
