@@ -75,7 +75,7 @@ if step_src:
             depends=sources("bridge/src/*.h", "shm/include/*.h"),
             # No FMA contraction: the kernel must give the Python reference's exact doubles.
             extra_compile_args=CFLAGS + ["-ffp-contract=off"],
-            libraries=["m", "dl", "pthread"],
+            libraries=["m", "dl"],
         )
     )
 

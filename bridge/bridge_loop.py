@@ -15,7 +15,6 @@ as an ESC does.
 from __future__ import annotations
 
 import math
-import os
 import time
 from dataclasses import dataclass
 
@@ -47,14 +46,6 @@ _KIND_U16 = word_index(Kind.NONE, "kind", 2)
 # length or at the IMU's noise refills (1,024 steps), the GNSS epochs being made in C
 # (docs/howto/speed.md).
 BATCH_MAX_STEPS = 256
-
-
-def _spare_core() -> bool:
-    """More than one CPU for this process: a thread beside the loop runs beside it."""
-    try:
-        return len(os.sched_getaffinity(0)) > 1
-    except (AttributeError, OSError):
-        return (os.cpu_count() or 1) > 1
 
 
 @dataclass
@@ -268,16 +259,8 @@ class BridgeLoop:
         self._fc_own_process = fc_poll_c is None
         self.fc_pending = False
         slots = len(sim.buffer.buf) // _SLOT_BYTES
-        # Two traces, a batch each in turn: with a core to spare (one process) the trace
-        # hash takes one batch's on its own thread while the next batch fills the other
-        # (Blake2b.update_later, bridge/src/hash_worker.h): the same bytes in the same order.
-        self._traces = [np.zeros(BATCH_MAX_STEPS * (slots + 16) * _SLOT_BYTES, dtype=np.uint8)
-                        for _ in range(2)]
-        self._trace_at = 0
-        self._trace_buf = self._traces[0]
+        self._trace_buf = np.zeros(BATCH_MAX_STEPS * (slots + 16) * _SLOT_BYTES, dtype=np.uint8)
         self._trace_mv = memoryview(self._trace_buf)
-        self._hash_on_thread = (not self._kernel_hashes and self._trace
-                                and _spare_core() and self._hash.start_thread())
         self._io = np.zeros(_step.IO_WORDS, dtype=np.int64)
         self._iow = memoryview(self._io)
         self._iow[_step.IO_ERR_EVERY] = self.ERROR_SAMPLE_STEPS
@@ -308,11 +291,7 @@ class BridgeLoop:
         w = self._iow
         used = w[_step.IO_TRACE_BYTES]
         if used and self._trace and not self._kernel_hashes:
-            if self._hash_on_thread:
-                self._hash.update_later(self._trace_mv[:used])
-                self._next_trace()
-            else:
-                self._hash_update(self._trace_mv[:used])
+            self._hash_update(self._trace_mv[:used])
         if w[_step.IO_OTHER_N]:     # the FC's FAULT records, routed before the next step
             at = w[_step.IO_OTHER_AT]
             self.fault_records.route(self._pwm_buf[at:at + w[_step.IO_OTHER_N]].copy())
@@ -335,13 +314,6 @@ class BridgeLoop:
                 self._io_stale = True
         self._drain_events()
         return done
-
-    def _next_trace(self) -> None:
-        """The next batch's trace in the other buffer: the thread hashes this one's."""
-        self._trace_at ^= 1
-        self._trace_buf = self._traces[self._trace_at]
-        self._trace_mv = memoryview(self._trace_buf)
-        self.sim.kernel.set_trace(self._trace_buf)
 
     def _log_rotor_rows(self, k0: int, done: int) -> None:
         """The rotor speeds the batch left after each of its steps k0+1.., to the log's

@@ -96,27 +96,6 @@ static int take_buffers(Kernel *self, PyObject *trace, PyObject *pwm, PyObject *
     return 0;
 }
 
-/* set_trace(buffer): the next batches' trace goes there (bind_lockstep's checks), so that
- * the one before can be hashed meanwhile (Blake2b.update_later; bridge/bridge_loop.py). */
-PyObject *Kernel_set_trace(Kernel *self, PyObject *arg)
-{
-    sb_batch *b = &self->batch;
-    if (b->ls.api == NULL || b->ls.io[SB_IO_PENDING] != 0) {
-        PyErr_SetString(PyExc_RuntimeError, "set_trace: bind_lockstep first, and not while "
-                                            "a step is pending (finish_step)");
-        return NULL;
-    }
-    Py_buffer v;
-    const Py_ssize_t rec = (Py_ssize_t)sizeof(sb_record);
-    if (take_buffer(arg, &v, rec * (self->n_slots + 16), 1, "trace") < 0)
-        return NULL;
-    sb_step_release(&b->trace);
-    b->trace = v;
-    b->ls.trace = v.buf;
-    b->ls.trace_len = (size_t)v.len;
-    Py_RETURN_NONE;
-}
-
 /* bind_lockstep(segment, fc_poll, trace, pwm, io, errors, rotor, bridge_word, fc_word,
  *               trace_hash=None, hand_on_kinds=None) */
 PyObject *Kernel_bind_lockstep(Kernel *self, PyObject *args, PyObject *kwds)

@@ -3,35 +3,16 @@
  * blake2b.c: update(buffer), digest(), hexdigest(), as hashlib's blake2b. It lives in this
  * extension so that Kernel.run_batch can feed the same state from C (step_batch.c) while
  * Python feeds it the steps it runs itself (bridge/bridge_loop.py). It keeps the GIL: the
- * loop's thread is its only user. With start_thread(), update_later(buffer) hashes on a
- * thread of its own (hash_worker.h) while the caller goes on; every other use waits for it.
+ * loop's thread is its only user.
  */
 #include "step_kernel.h"
 
 #include "blake2b.h"
-#include "hash_worker.h"
 
 typedef struct {
     PyObject_HEAD
     sb_blake2b state;
-    sb_hash_worker worker;   /* running after start_thread() */
-    Py_buffer job;           /* the buffer of update_later's pending job (obj NULL: none) */
 } Blake2bObject;
-
-/* The pending job done and its buffer let go: the state is whole. */
-static void settle(Blake2bObject *self)
-{
-    sb_hash_worker_wait(&self->worker);
-    if (self->job.obj != NULL)
-        PyBuffer_Release(&self->job);
-}
-
-static void Blake2b_dealloc(Blake2bObject *self)
-{
-    settle(self);
-    sb_hash_worker_stop(&self->worker);
-    Py_TYPE(self)->tp_free((PyObject *)self);
-}
 
 static int Blake2b_init(Blake2bObject *self, PyObject *args, PyObject *kwds)
 {
@@ -39,7 +20,6 @@ static int Blake2b_init(Blake2bObject *self, PyObject *args, PyObject *kwds)
     Py_ssize_t n = 16;
     if (!PyArg_ParseTupleAndKeywords(args, kwds, "|$n", kwlist, &n))
         return -1;
-    settle(self);    /* __init__ again: no job may update the fresh state */
     if (sb_blake2b_init(&self->state, (size_t)n) < 0) {   /* a negative n wraps above 64 */
         PyErr_Format(PyExc_ValueError, "digest_size must be 1..%d", SB_BLAKE2B_MAX_DIGEST);
         return -1;
@@ -52,40 +32,14 @@ static PyObject *Blake2b_update(Blake2bObject *self, PyObject *arg)
     Py_buffer v;
     if (PyObject_GetBuffer(arg, &v, PyBUF_C_CONTIGUOUS) < 0)
         return NULL;
-    settle(self);
     sb_blake2b_update(&self->state, v.buf, (size_t)v.len);
     PyBuffer_Release(&v);
     Py_RETURN_NONE;
 }
 
-/* update_later(buffer): as update, on the thread when started (else now). The caller
- * leaves the bytes unchanged until its next call on this object returns. */
-static PyObject *Blake2b_update_later(Blake2bObject *self, PyObject *arg)
-{
-    if (!self->worker.running)
-        return Blake2b_update(self, arg);
-    Py_buffer v;
-    if (PyObject_GetBuffer(arg, &v, PyBUF_C_CONTIGUOUS) < 0)
-        return NULL;
-    settle(self);
-    self->job = v;
-    sb_hash_worker_post(&self->worker, v.buf, (size_t)v.len);
-    Py_RETURN_NONE;
-}
-
-/* start_thread() -> bool: update_later hashes on a thread of its own from now on; False
- * when no thread could be started (update_later then hashes at once). */
-static PyObject *Blake2b_start_thread(Blake2bObject *self, PyObject *Py_UNUSED(unused))
-{
-    if (!self->worker.running && sb_hash_worker_start(&self->worker, &self->state) < 0)
-        Py_RETURN_FALSE;
-    Py_RETURN_TRUE;
-}
-
 static PyObject *Blake2b_digest(Blake2bObject *self, PyObject *Py_UNUSED(unused))
 {
     uint8_t out[SB_BLAKE2B_MAX_DIGEST];
-    settle(self);
     sb_blake2b_digest(&self->state, out);
     return PyBytes_FromStringAndSize((const char *)out, (Py_ssize_t)self->state.digest_len);
 }
@@ -95,7 +49,6 @@ static PyObject *Blake2b_hexdigest(Blake2bObject *self, PyObject *Py_UNUSED(unus
     static const char HEX[] = "0123456789abcdef";
     uint8_t out[SB_BLAKE2B_MAX_DIGEST];
     char text[2 * SB_BLAKE2B_MAX_DIGEST];
-    settle(self);
     sb_blake2b_digest(&self->state, out);
     for (size_t i = 0; i < self->state.digest_len; i++) {
         text[2 * i] = HEX[out[i] >> 4];
@@ -106,11 +59,6 @@ static PyObject *Blake2b_hexdigest(Blake2bObject *self, PyObject *Py_UNUSED(unus
 
 static PyMethodDef Blake2b_methods[] = {
     {"update", (PyCFunction)Blake2b_update, METH_O, "update(buffer): hash its bytes next"},
-    {"update_later", (PyCFunction)Blake2b_update_later, METH_O,
-     "update_later(buffer): hash its bytes next, on the thread once started; leave them "
-     "unchanged until the next call on this object returns"},
-    {"start_thread", (PyCFunction)Blake2b_start_thread, METH_NOARGS,
-     "start_thread() -> bool: update_later hashes on a thread of its own"},
     {"digest", (PyCFunction)Blake2b_digest, METH_NOARGS, "digest() -> bytes"},
     {"hexdigest", (PyCFunction)Blake2b_hexdigest, METH_NOARGS, "hexdigest() -> str"},
     {NULL, NULL, 0, NULL}};
@@ -124,7 +72,6 @@ PyTypeObject SbBlake2bType = {
     .tp_flags = Py_TPFLAGS_DEFAULT,
     .tp_new = PyType_GenericNew,
     .tp_init = (initproc)Blake2b_init,
-    .tp_dealloc = (destructor)Blake2b_dealloc,
     .tp_methods = Blake2b_methods,
 };
 
@@ -134,6 +81,5 @@ sb_blake2b *sb_step_hash_state(PyObject *obj)
         PyErr_SetString(PyExc_TypeError, "trace_hash must be a _step.Blake2b");
         return NULL;
     }
-    settle((Blake2bObject *)obj);   /* C updates it directly from here on */
     return &((Blake2bObject *)obj)->state;
 }

@@ -102,7 +102,6 @@ long sb_step_run_items(Kernel *self, PyObject *const *pwm, Py_ssize_t first);
 /* step_batch.c: Kernel.bind_lockstep / run_batch, and their clean-up */
 PyObject *Kernel_bind_lockstep(Kernel *self, PyObject *args, PyObject *kwds);
 PyObject *Kernel_run_batch(Kernel *self, PyObject *arg);
-PyObject *Kernel_set_trace(Kernel *self, PyObject *arg);
 PyObject *Kernel_finish_step(Kernel *self, PyObject *arg);
 void sb_batch_clear(sb_batch *b);
 int sb_batch_traverse(sb_batch *b, visitproc visit, void *arg);

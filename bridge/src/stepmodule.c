@@ -316,8 +316,6 @@ static PyMethodDef Kernel_methods[] = {
      "run_batch(n) -> steps done: up to n lockstep steps of bridge and in-process FC"},
     {"finish_step", (PyCFunction)Kernel_finish_step, METH_O,
      "finish_step(count) -> steps done: the step run_batch left to Python, finished"},
-    {"set_trace", (PyCFunction)Kernel_set_trace, METH_O,
-     "set_trace(buffer): the next batches' trace there (the last one's hashed meanwhile)"},
     {"set_imu_fault", (PyCFunction)(void (*)(void))Kernel_set_imu_fault,
      METH_VARARGS | METH_KEYWORDS,
      "set_imu_fault(sensor, stuck, bias, sigma, clip): the gyro's or accel's faults"},

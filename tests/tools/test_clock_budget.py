@@ -5,8 +5,8 @@ import pytest
 from silbridge.tools.speed import clock_budget as cb
 
 # `perf script -F pid,tid,time,ip,sym,dso` of seven samples: startup, then the bridge's loop
-# (pid 10, thread 10) in JSBSim, in a getter, in Python between batches, its trace hash's
-# thread (10/12), and the FC (pid 11) waiting.
+# (pid 10, thread 10) in JSBSim, in a getter, in Python between batches, another of its
+# threads (10/12, hashing), and the FC (pid 11) waiting.
 SCRIPT = """\
    10/10 100.000000:
 \t    1111 _PyEval_EvalFrameDefault (/usr/lib/libpython3.11.so)
@@ -70,7 +70,7 @@ def test_the_budget_counts_the_loop_only():
     assert r["bridge"]["JSBSim getters and setters"] == 0.25
     assert r["bridge"]["Python between batches"] == 0.25
     assert r["fc_samples"] == 1 and r["fc"]["waiting for the bridge"] == 1.0
-    # the trace hash on its own thread is the bridge's, beside its loop: not a part, not FC
+    # another thread of the bridge's process is beside its loop: not a part, not the FC
     assert r["beside_loop_samples"] == 1 and r["bridge"]["trace hash"] == 0.0
 
 

@@ -9,7 +9,8 @@ flight with its stack (DWARF unwinding: our extensions and the wheels keep no fr
 the samples of the lockstep loop's thread, the span between the first and the last sample
 inside `Kernel.run_batch`, are counted by part (`PARTS`, first match wins). In two processes
 the FC's process is reported on its own: how much of its time it computes, how much it waits;
-the bridge's other threads (the trace hash's, in one process) are counted beside the loop.
+the bridge's other threads (a MAVLink server's, numpy's) are counted beside the loop,
+not in its parts.
 
     python -m silbridge.tools.speed.clock_budget [--processes 1|2] [--duration S] [--json]
 
@@ -163,7 +164,7 @@ def _print(r: dict) -> None:
         if share > 0:
             print(f"  {name:32s} {100 * share:5.1f} %")
     if r["beside_loop_samples"]:
-        print(f"the bridge's other threads (the trace hash's): {r['beside_loop_samples']} "
+        print(f"the bridge's other threads: {r['beside_loop_samples']} "
               f"samples, {100 * r['beside_loop_samples'] / r['bridge_samples']:.1f} % of the "
               f"loop's")
     if "fc" in r:
