@@ -59,9 +59,14 @@ int sb_step_set_noise(sb_lowrate *lr, Py_buffer *held, PyObject *arr, Py_ssize_t
     Py_buffer v;
     if (sb_step_get_f64(arr, &v, width, 0, what) < 0)
         return -1;
-    if (v.ndim != 2 || v.shape[1] != width || pos < 0 || pos > v.shape[0]) {
-        PyErr_Format(PyExc_ValueError, "%s must be (rows, %zd) float64, read from a row "
-                                       "0..rows (%zd given)", what, width, pos);
+    if (v.ndim != 2 || v.shape[1] != width) {
+        PyErr_Format(PyExc_ValueError, "%s must be (rows, %zd) float64", what, width);
+        PyBuffer_Release(&v);
+        return -1;
+    }
+    if (pos < 0 || pos > v.shape[0]) {
+        PyErr_Format(PyExc_ValueError, "%s: the first row to read must be 0..%zd, not %zd",
+                     what, v.shape[0], pos);
         PyBuffer_Release(&v);
         return -1;
     }

@@ -119,16 +119,18 @@ def test_the_kernel_refuses_to_take_the_model_unconfigured():
         sim.kernel.gnss_give()
 
 
-@pytest.mark.parametrize("block, pos", [(np.zeros((4, 5)), 0), (np.zeros((4, 6)), 5),
-                                        (np.zeros((4, 6)), -1)])
-def test_a_bad_noise_block_is_refused_and_the_one_before_kept(block, pos):
+@pytest.mark.parametrize("block, pos, why", [
+    (np.zeros((4, 5)), 0, r"GNSS noise must be \(rows, 6\) float64"),
+    (np.zeros((4, 6)), 5, "GNSS noise: the first row to read must be 0..4, not 5"),
+    (np.zeros((4, 6)), -1, "GNSS noise: the first row to read must be 0..4, not -1")])
+def test_a_bad_noise_block_is_refused_and_the_one_before_kept(block, pos, why):
     sim = Simulator(load_scenario("S1"), gnss_in_c=False)
     sim.kernel.configure_gnss(
         rate_hz=10.0, latency_ns=0, sigma_ned_m=(1.0, 1.0, 2.0), tau_s=5.0, vel_sigma_m_s=0.1,
         m_per_rad_lat=6.4e6, m_per_rad_lon=6.4e6, ground_alt_m=0.0, eph_cm=100, epv_cm=200,
         fix_type=3, satellites=10)
     sim.kernel.set_gnss_block(np.zeros((4, 6)), 3)
-    with pytest.raises(ValueError, match=r"GNSS noise must be \(rows, 6\) float64"):
+    with pytest.raises(ValueError, match=why):
         sim.kernel.set_gnss_block(block, pos)
     # The kernel still holds the good block, at its row 3: the model takes it there.
     sim.kernel.gnss_take(1, None, 0, 0)
