@@ -30,7 +30,7 @@ typedef struct {
 } sb_gnss_cfg;
 
 typedef struct {
-    int on;                    /* the stage makes the epochs (Python does while 0) */
+    int in_c;                  /* the stage makes the epochs (Python does while 0) */
     sb_gnss_cfg c;
     sb_lowrate lr;             /* on once configured; the epochs' schedule, their noise
                                 * rows (rows, 6: position NED, velocity NED), seq */

@@ -346,7 +346,7 @@ static const double *start_sample(sb_lowrate *lr, size_t width, long done_flag,
  * written, so the stream after the fault is the fault-free run's; no record, no seq. */
 static long skip_sample(sb_lowrate *lr, long done_flag, long no_noise)
 {
-    if (sb_lowrate_take(lr, 0) == NULL)
+    if (sb_lowrate_take(lr, 0) == NULL)   /* width 0: the row is skipped, not read */
         return no_noise;
     return sb_lowrate_spent(lr) ? done_flag : 0;
 }
@@ -459,7 +459,7 @@ long sb_sensor_stage_step(sb_sensor_stage *s, const sb_fdm_sample *in, int64_t s
             return f;
         flags |= f;
     }
-    if (s->gnss.on && sim_ns >= s->gnss.lr.next_ns) {
+    if (s->gnss.in_c && sim_ns >= s->gnss.lr.next_ns) {
         if ((f = gnss_epoch(s, in, &t, sim_ns)) < 0)
             return f;
         flags |= f;

@@ -159,7 +159,7 @@ typedef struct {
     double prev6[6];
     sb_imu_raw raw;           /* the chip's ODR samples for the log, when bound (imu_raw.h) */
     sb_held held;             /* records waiting for their release step */
-    sb_gnss_model gnss;       /* the GNSS's epochs, while gnss.on (else Python's) */
+    sb_gnss_model gnss;       /* the GNSS's epochs, while gnss.in_c (else Python's) */
     sb_sensor_faults faults;  /* issue 28's sensor faults (all off: one test per sample) */
     sb_pack pack;             /* the physics-side battery, once configured (battery.h) */
 } sb_sensor_stage;

@@ -37,6 +37,7 @@ PyObject *Kernel_configure_gnss(Kernel *self, PyObject *args, PyObject *kwds)
     c.satellites = (uint8_t)sats;
     sb_gnss_model *g = &self->stage.gnss;
     memset(g, 0, sizeof *g);
+    sb_step_release(&self->gnss_noise);   /* the model points at no block now */
     g->c = c;
     sb_lowrate_start(&g->lr, rate);
     Py_RETURN_NONE;
@@ -79,7 +80,7 @@ PyObject *Kernel_gnss_take(Kernel *self, PyObject *args)
     memcpy(g->err_ned_m, e, sizeof e);
     g->last_epoch_ns = last;
     g->lr.seq = (uint32_t)seq;
-    g->on = 1;
+    g->in_c = 1;
     Py_RETURN_NONE;
 }
 
@@ -88,7 +89,7 @@ PyObject *Kernel_gnss_take(Kernel *self, PyObject *args)
 PyObject *Kernel_gnss_give(Kernel *self, PyObject *Py_UNUSED(ignored))
 {
     sb_gnss_model *g = &self->stage.gnss;
-    if (!g->on) {
+    if (!g->in_c) {
         PyErr_SetString(PyExc_RuntimeError, "gnss_give: the C GNSS is not on (gnss_take)");
         return NULL;
     }
@@ -101,14 +102,14 @@ PyObject *Kernel_gnss_give(Kernel *self, PyObject *Py_UNUSED(ignored))
                                     (long long)g->last_epoch_ns, (Py_ssize_t)g->lr.pos,
                                     (unsigned long)g->lr.seq);
     if (state != NULL)   /* the stage stops only once Python has the state to go on with */
-        g->on = 0;
+        g->in_c = 0;
     return state;
 }
 
 PyObject *Kernel_get_gnss_on(Kernel *self, void *closure)
 {
     (void)closure;
-    return PyBool_FromLong(self->stage.gnss.on);
+    return PyBool_FromLong(self->stage.gnss.in_c);
 }
 
 PyObject *Kernel_get_gnss_seq(Kernel *self, void *closure)
