@@ -13,6 +13,7 @@ from mcap.records import Chunk, Message
 from mcap.stream_reader import StreamReader
 
 from silbridge.shm.records import RECORD_DTYPE, Kind, empty
+from silbridge.tools.logs.log_format import CHANNEL_DTYPE_KEY
 from silbridge.tools.logs.log_synth import SYNTH_STATUS_DTYPE, synthetic_run, write_run
 from silbridge.tools.logs.mcap_layout import MAGIC, OP_MESSAGE, RECORD_PREFIX
 from silbridge.tools.logs.mcap_log import TIMING_DTYPE, LogError, LogWriter, read_log
@@ -325,6 +326,24 @@ def test_flipped_byte_is_caught_by_the_crc(tmp_path, run):
     log = read_log(path)
     assert log.corrupt and "CRC" in log.read_error
     assert len(log.channels["/imu"]) < len(first)
+
+
+def test_every_batch_ends_with_zlibs_crc32_of_its_bytes(tmp_path, run):
+    """The schema's crc32 field is zlib's CRC-32 (a reader in any language checks it with
+    its zlib), whichever implementation computes it here."""
+    import zlib
+    path = tmp_path / "crc.mcap"
+    with LogWriter(path, metadata=run.metadata, batch_rows=150) as w:
+        write_run(run, w)
+    checked = 0
+    with open(path, "rb") as f:
+        for _schema, channel, message in make_reader(f).iter_messages():
+            if CHANNEL_DTYPE_KEY not in channel.metadata:    # the /viz channels: no CRC
+                continue
+            body, word = message.data[:-4], int.from_bytes(message.data[-4:], "little")
+            assert word == zlib.crc32(body), (channel.topic, message.sequence)
+            checked += 1
+    assert checked > 20
 
 
 def test_not_an_mcap_file_is_refused(tmp_path):
