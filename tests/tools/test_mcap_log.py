@@ -346,6 +346,33 @@ def test_every_batch_ends_with_zlibs_crc32_of_its_bytes(tmp_path, run):
     assert checked > 20
 
 
+def test_without_fastcrc_logs_are_written_and_read_with_zlibs_crc(tmp_path, run):
+    """`silbridge transport`'s -nofastcrc children hide fastcrc from the whole process: a
+    log still works there, byte for byte the one written with fastcrc."""
+    with LogWriter(tmp_path / "fast.mcap", metadata=run.metadata, batch_rows=150) as w:
+        w.write("/imu", run.channels["/imu"])
+    script = (
+        "import sys; sys.modules['fastcrc'] = None\n"
+        "from silbridge.tools.logs.log_synth import synthetic_run\n"
+        "from silbridge.tools.logs.mcap_log import LogWriter, read_log\n"
+        "run = synthetic_run(3.0, seed=3)\n"
+        f"with LogWriter({str(tmp_path / 'zlib.mcap')!r}, metadata=run.metadata,"
+        " batch_rows=150) as w:\n"
+        "    w.write('/imu', run.channels['/imu'])\n"
+        f"log = read_log({str(tmp_path / 'fast.mcap')!r})\n"
+        "assert log.read_error is None and len(log.channels['/imu']) == len(run.channels['/imu'])\n"
+        "import silbridge.tools.logs.log_schema as s; assert s.crc32.__module__ == 'zlib'\n")
+    subprocess.run([sys.executable, "-c", script], check=True)
+    ours, theirs = read_log(tmp_path / "fast.mcap"), read_log(tmp_path / "zlib.mcap")
+    assert theirs.read_error is None
+    _same_rows(theirs.channels["/imu"], ours.channels["/imu"])
+
+    def batches(path):
+        with open(path, "rb") as f:
+            return [m.data for _s, c, m in make_reader(f).iter_messages() if c.topic == "/imu"]
+    assert batches(tmp_path / "zlib.mcap") == batches(tmp_path / "fast.mcap")
+
+
 def test_not_an_mcap_file_is_refused(tmp_path):
     bad = tmp_path / "notes.mcap"
     bad.write_text("hello")
