@@ -266,9 +266,9 @@ def decode_messages(row_dtype: np.dtype, messages: list[bytes]) -> np.ndarray:
 
 def _rows(row_dtype: np.dtype, chunks: list) -> np.ndarray:
     """The chunks' bytes copied once into one writable array. Into numpy's own buffer, not
-    a bytearray.join: numpy asks the kernel for huge pages on a large block, so the copy
-    meets a page fault every 2 MB instead of every 4 KB (a 120 s log's ~50 MB of rows: 19
-    ms against 28 here)."""
+    a bytearray.join: numpy asks the kernel for huge pages on a large block, so copying a
+    120 s log's ~50 MB of rows meets ~240 page faults instead of ~12,500 (19 ms against 28
+    here)."""
     out = np.empty(sum(len(c) for c in chunks), dtype=np.uint8)
     dst, at = memoryview(out), 0
     for c in chunks:
