@@ -126,3 +126,36 @@ def test_binding_raw_rows_without_the_chip_is_refused():
     sim = Simulator(load_scenario("S1"))
     with pytest.raises(ValueError, match="vibration on"):
         sim.kernel.bind_imu_raw(np.zeros(64, RAW_DTYPE))
+
+
+class _Writer:
+    """The log writer's two calls ImuRawLog makes; it keeps the rows."""
+
+    def __init__(self):
+        self.rows = []
+
+    def declare(self, channel, dtype):
+        pass
+
+    def write(self, channel, rows):
+        self.rows.append(rows.copy())
+
+
+def test_the_logs_raw_buffer_holds_a_whole_batch_of_steps():
+    """ImuRawLog takes the chip's rows once per batch (bridge_loop's write_rows): its buffer
+    holds the longest batch's rows, so none is dropped, at the chip's highest data rate."""
+    from silbridge.bridge.bridge_loop import BATCH_MAX_STEPS
+    from silbridge.tools.logs.imu_raw_log import ImuRawLog
+    sim = Simulator(load_scenario("V2", overrides={"imu_chip.odr_hz": 32000.0}))
+    n = int(sim.scenario.imu_chip.odr_hz // FC_HZ)
+    writer = _Writer()
+    raw = ImuRawLog(writer, sim.kernel, n, rotor_hook=lambda *a: None)
+    pwm = (sim.hover_pwm_us - 60.0,) * 4
+    for _ in range(BATCH_MAX_STEPS):
+        sim.step(pwm)
+    raw.take()
+    raw.close()
+    rows = np.concatenate(writer.rows)
+    assert raw.dropped == 0
+    assert len(rows) == n * BATCH_MAX_STEPS
+    assert np.all(np.diff(rows["sim_ns"]) == 1_000_000_000 // 32000)

@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from silbridge.bridge.bridge_loop import BATCH_MAX_STEPS
+
 RAW_IMU_CHANNEL = "/imu_raw"
 RAW_DTYPE = np.dtype([
     ("sim_ns", "<i8"),                   # the ODR tick [ns of sim time]
@@ -34,8 +36,9 @@ RAW_DTYPE = np.dtype([
 assert RAW_DTYPE.itemsize == 32          # bridge/src/imu_raw.h sb_imu_raw_row
 RATE_KEY = "imu_raw_hz"                  # start metadata config key of the channel's rate
 # Steps the buffer holds between two takes: a take follows every step or batch, and a
-# batch is at most 64 steps (bridge/bridge_loop.py BATCH_MAX_STEPS); twice that is margin.
-BUFFER_STEPS = 128
+# batch is at most BATCH_MAX_STEPS steps; twice that is margin. (A logged flight's batches
+# are shorter still, cut where the FC's log cuts its own, but the buffer must not rely on it.)
+BUFFER_STEPS = 2 * BATCH_MAX_STEPS
 
 
 def declare_rate(metadata: dict, odr_hz: float) -> dict:
