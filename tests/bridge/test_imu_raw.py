@@ -12,11 +12,12 @@ import math
 import numpy as np
 import pytest
 
+from silbridge.bridge.bridge_loop import BATCH_MAX_STEPS
 from silbridge.bridge.errors import ScenarioError
 from silbridge.bridge.scenario import load_scenario
 from silbridge.bridge.simulator import Simulator
 from silbridge.shm.records import Kind
-from silbridge.tools.logs.imu_raw_log import RAW_DTYPE
+from silbridge.tools.logs.imu_raw_log import RAW_DTYPE, ImuRawLog
 from silbridge.tools.logs.spectrum import welch
 from silbridge.tools.logs.spectrum_peaks import refine
 
@@ -144,9 +145,7 @@ class _Writer:
 def test_the_logs_raw_buffer_holds_a_whole_batch_of_steps():
     """ImuRawLog takes the chip's rows once per batch (bridge_loop's write_rows): its buffer
     holds the longest batch's rows, so none is dropped, at the chip's highest data rate."""
-    from silbridge.bridge.bridge_loop import BATCH_MAX_STEPS
-    from silbridge.tools.logs.imu_raw_log import ImuRawLog
-    sim = Simulator(load_scenario("V2", overrides={"imu_chip.odr_hz": 32000.0}))
+    sim = Simulator(load_scenario("V2", overrides={"imu_chip.odr_hz": 32000}))
     n = int(sim.scenario.imu_chip.odr_hz // FC_HZ)
     writer = _Writer()
     raw = ImuRawLog(writer, sim.kernel, n, rotor_hook=lambda *a: None)
