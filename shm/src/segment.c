@@ -346,8 +346,10 @@ int sb_segment_attach(sb_segment *seg, const char *name, sb_seg_diag *diag)
     }
     int s = map_fd(seg, fd, (size_t)st.st_size, diag);
     if (s == SB_SEG_OK) s = check_identity(seg->hdr, seg->size, diag);
-    if (s == SB_SEG_OK && (atomic_load_explicit(&seg->hdr->owner_closed, memory_order_acquire) ||
-                           !lock_held_by_other(fd, LOCK_OWNER_BYTE)))
+    /* The owner's lock alone is not enough: a bridge replacing this stale segment holds
+     * its lock for a moment (handle_existing) before unlinking it; its dead owner's pid
+     * tells (as sb_segment_owner_alive and the probe do). */
+    if (s == SB_SEG_OK && !sb_segment_owner_alive(seg))
         s = SB_SEG_E_STALE;
     if (s == SB_SEG_OK) s = claim_peer(seg, diag);
     if (s != SB_SEG_OK) {

@@ -90,6 +90,28 @@ def test_attach_waits_for_the_bridge(name, stale_first):
         proc.wait()
 
 
+def test_a_stale_segment_being_replaced_is_not_attached(name):
+    """A bridge replacing a crashed bridge's segment holds the old segment's owner lock for a
+    moment before it unlinks it: an FC attaching just then finds the lock held, but the
+    owner in the header dead, and waits for the new segment instead of joining the dead one
+    (CI once saw attach return the crashed owner's segment in that moment). The replacing
+    bridge's moment is held open here by a process that locks the owner byte and waits."""
+    dead = _crashed_owner(name)
+    code = ("import fcntl, os, time\n"
+            f"fd = os.open({shm_path(name)!r}, os.O_RDWR)\n"
+            "fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB, 1, 0)\n"
+            "print('locked', flush=True)\n"
+            "time.sleep(30)\n")
+    holder = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        with pytest.raises(OwnerDeadError, match=f"pid {dead}"):
+            Segment.attach(name)
+    finally:
+        holder.kill()
+        holder.wait()
+
+
 def test_segment_is_private_to_its_user(name):
     with Segment.create(name, sensor_slots=16, actuator_slots=16):
         mode = stat.S_IMODE(os.stat(shm_path(name)).st_mode)

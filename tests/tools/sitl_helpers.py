@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import random
 import signal
 import socket
 import subprocess
@@ -22,13 +23,33 @@ sys.path.insert(0, os.path.join(HERE, "..", "mavlink"))
 from mavtest_client import GcsClient  # noqa: E402,F401
 
 
+def _ports_the_kernel_never_picks() -> range:
+    """Ports below the kernel's ephemeral range (Linux: ip_local_port_range), or an empty
+    range where it cannot be read or leaves no room below it."""
+    try:
+        with open("/proc/sys/net/ipv4/ip_local_port_range") as f:
+            low = int(f.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return range(0)
+    return range(max(1024, low - 12000), low)
+
+
 def free_udp_ports(n: int) -> list[int]:
-    """n distinct free loopback UDP ports (held open together while chosen)."""
+    """n distinct free loopback UDP ports (held open together while chosen), from below the
+    kernel's ephemeral range: a port is closed before another process binds it, and one the
+    kernel could number for itself might meanwhile become some socket's automatic source port
+    (a vehicle's udpout, a SITL's): "Address already in use" (seen in CI, MAVProxy's udpin)."""
+    pool = _ports_the_kernel_never_picks()
+    candidates = iter(random.sample(pool, len(pool)) if len(pool) >= 100 * n else ())
     socks = []
     try:
-        for _ in range(n):
+        while len(socks) < n:
             s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-            s.bind(("127.0.0.1", 0))
+            try:
+                s.bind(("127.0.0.1", next(candidates, 0)))   # 0: the kernel's choice
+            except OSError:
+                s.close()
+                continue
             socks.append(s)
         return [s.getsockname()[1] for s in socks]
     finally:

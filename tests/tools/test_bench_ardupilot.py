@@ -45,6 +45,10 @@ from silbridge.tools.benchmark.metrics import Windows, compute_metrics
 from silbridge.tools.logs.integrity import check_log
 from silbridge.tools.logs.mcap_log import read_log
 
+sys.path.insert(0, os.path.dirname(__file__))
+
+from sitl_helpers import free_udp_port  # noqa: E402
+
 CLI = [sys.executable, "-m", "silbridge.tools"]
 
 
@@ -83,9 +87,7 @@ def test_bench_refuses_an_unknown_fc(tmp_path):
 
 
 def test_bridge_command_serves_a_fake_sitl():
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
+    port = free_udp_port()
     proc = subprocess.Popen(CLI + ["bridge", "--fc", "ardupilot", "--link-addr",
                                    f"127.0.0.1:{port}", "--duration", "0.2", "--json"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -28,7 +28,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 from silbridge.tools.logs.mcap_log import read_log
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "fc_sil"))
+sys.path.insert(0, os.path.dirname(__file__))
 
+from sitl_helpers import free_udp_port  # noqa: E402
 from vehicle_harness import fly_scripted  # noqa: E402
 
 from silbridge.mavlink.gcs.vehicle_api import CopterMode  # noqa: E402
@@ -74,16 +76,8 @@ def test_lockstep_stays_deterministic_with_esc_telemetry_on(tmp_path):
     assert hashes[0] and hashes[0] == hashes[1]
 
 
-def _free_udp_port() -> int:
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
-
-
 def test_a_ground_station_gets_esc_telemetry_and_vibration(tmp_path):
-    port = _free_udp_port()
+    port = free_udp_port()
     proc = subprocess.Popen(SB + ["sitl", "--scenario", _scenario(tmp_path, "gcs"), "--speed",
                                   "4", "--processes", "1", "--gcs", f"udpin:127.0.0.1:{port}",
                                   "--no-default-gcs"],
