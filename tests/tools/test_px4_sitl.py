@@ -137,8 +137,9 @@ def test_px4_takes_off_and_holds_in_offboard_in_real_time(tmp_path):
     assert 0.5 < s["sim_s_total"] / s["wall_total_s"] < 1.3
     log = read_log(str(tmp_path / "px4.mcap"))
     assert check_log(log) == []
-    # Under load, some real-time boots of PX4 start EKF2 with a vertical velocity at rest and
-    # keep the height it integrates as their baro offset (issue 29); the pre-flight check
+    # Some real-time boots of PX4 started EKF2 with a vertical velocity at rest and kept the
+    # height it integrated as their baro offset (issue 29; most of them when the boot was
+    # freewheeled at the step period, bridge/autopilots/px4/server.py); the pre-flight check
     # (tools/autopilots/px4/rest_height.py) takes off only once PX4's height at rest has
     # settled, restarting PX4 when it does not, so the hold is held to lockstep's figures.
     from silbridge.tools.autopilots.px4.flight import HEIGHT_RESTARTS

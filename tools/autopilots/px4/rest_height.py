@@ -9,7 +9,10 @@ Nothing in PX4's own arming checks catches it: the baro innovations agree with t
 In the five PX4 logs that caught it (SDLOG_MODE 2), the velocity grows in 13-15 equal steps
 of g x 10 to g x 20 ms (one size per boot), as if EKF2 predicted that often from one IMU
 sample with no delta velocity (its oldest, while its IMU buffer fills); what in PX4's
-start-up under load gives it that sample is not known. Lockstep boots have not shown it.
+start-up under load gives it that sample is not known. Lockstep boots have not shown it, and
+the real-time ones stopped showing it once the server freewheeled PX4's boot at lockstep's
+pace rather than at the step period (bridge/autopilots/px4/server.py: 16 of 16 good boots,
+against 7 of 24, on an idle machine that day); the check stays, for a PX4 that still does.
 
 A vehicle standing where it booted must read a local height (LOCAL_POSITION_NED z) near 0
 and a vertical speed near 0. This check watches both before arming: `settled` once both have
