@@ -221,14 +221,17 @@ def _freewheel_steps(realtime: bool, wall_s: float = 0.4) -> int:
     phys = Px4Physics(lambda: Simulator(load_scenario("S1", seed=1)), make_codec(1, 51))
     with Px4HilServer(phys, ("127.0.0.1", 0)) as server:
         px4 = socket.create_connection(server.address, timeout=10)
-        drain = threading.Thread(target=lambda: [None for _ in iter(lambda: px4.recv(65536),
-                                                                    b"")], daemon=True)
-        drain.start()
+
+        def read_until_closed():
+            while px4.recv(65536):
+                pass
+        reader = threading.Thread(target=read_until_closed, daemon=True)
+        reader.start()
         t_end = time.monotonic() + wall_s
         res = server.serve(30.0, realtime=realtime, connect_timeout_s=10.0,
                            idle_timeout_s=10.0, stop=lambda: time.monotonic() >= t_end)
+    reader.join(10)      # the server closed the link: the reader's recv returned b""
     px4.close()
-    drain.join(10)
     return res.stats["freewheel_steps"]
 
 
