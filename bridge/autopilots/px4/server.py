@@ -6,10 +6,11 @@
 PX4 connects (TCP; `simulator_mavlink start -c PORT`). Until its first HIL_ACTUATOR_CONTROLS
 the server freewheels: one PX4 step with the motors stopped per FREEWHEEL_WALL_S of wall time,
 because PX4 cannot answer before its estimator and logger run, and they need sim time to move.
-Real time freewheels at that pace too: freewheeled at the step period (4 ms), PX4 v1.15's EKF2
-often started with a vertical velocity at rest and stood ~1 m off the ground ever after
-(tools/autopilots/px4/rest_height.py): on an idle 2-core VM 7 of 24 such boots were good, and
-16 of 16 freewheeled at FREEWHEEL_WALL_S.
+Real time freewheels a PX4 SITL (one that connects to the listener) at that pace too: fed at
+the step period (4 ms), PX4 v1.15's EKF2 often started with a vertical velocity at rest and
+stood ~1 m off the ground ever after (tools/autopilots/px4/rest_height.py): on an idle 2-core
+VM 7 of 24 such boots were good, and 16 of 16 fed at FREEWHEEL_WALL_S. A board on a serial
+line (a channel given) runs on its own clock and is fed at the step period from the start.
 Then:
 - lockstep (default): one step per reply that answers the last step sent (physics.py
   tells); a reply that never comes within `stall_s` wall seconds makes the server step anyway
@@ -136,12 +137,13 @@ class Px4HilServer:
         last_rx = time.monotonic()
         pending = 0                  # answers not yet stepped on (lockstep)
         next_wall = time.monotonic()
+        # the freewheel's pace: a SITL boots on sim time, a board on its own clock (docstring)
+        boot_wall = step_wall if realtime and self.listener is None else FREEWHEEL_WALL_S
         while phys.sim.sim_ns < end_ns and ch is not None:
             now = time.monotonic()
             booting = phys.first_reply_us is None
             if booting or realtime:
-                wait = max(0.0, min(next_wall - now, FREEWHEEL_WALL_S if booting or not realtime
-                                    else step_wall))
+                wait = max(0.0, min(next_wall - now, boot_wall if booting else step_wall))
             else:
                 wait = 0.0 if pending else min(stall_s, 0.05)
             if wait > 0 and spin_ns and not realtime and phys.first_reply_us is not None:
@@ -165,8 +167,7 @@ class Px4HilServer:
                                f"{phys.sim.sim_ns / _NS:.3f} s: is it hung?")
             if phys.first_reply_us is None:          # freewheel until PX4 answers
                 if now >= next_wall:
-                    # the same pace in real time (module docstring)
-                    next_wall = now + FREEWHEEL_WALL_S
+                    next_wall = now + boot_wall
                     self._send_step(freewheel=True)
             elif realtime:
                 if now >= next_wall:
