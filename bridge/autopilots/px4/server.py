@@ -146,7 +146,7 @@ class Px4HilServer:
                 wait = max(0.0, min(next_wall - now, boot_wall if booting else step_wall))
             else:
                 wait = 0.0 if pending else min(stall_s, 0.05)
-            if wait > 0 and spin_ns and not realtime and phys.first_reply_us is not None:
+            if wait > 0 and spin_ns and not realtime and not booting:
                 msgs = spin_poll(lambda: ch.receive(0) or None, spin_ns) or ch.receive(wait)
             else:
                 msgs = ch.receive(wait)
