@@ -5,6 +5,11 @@ until a margin before the deadline and spins the rest on the monotonic clock.
 Deadlines are absolute (t0 + k * period / speed), so a late step does not
 push every later step back: the loop catches up, and the overrun is counted.
 
+The spin runs in C with the GIL released (shm spin_until): spun in Python it kept the GIL, and
+where the period is shorter than the spin (--speed 6 and up) the loop never let go of it; the
+MAVLink server thread of a one-process `fly` then waited a switch interval (5 ms) for every
+take, and its streams went out up to 3 s of sim time apart (tests/bridge/test_pacing.py).
+
 busy_wait spins the whole period instead: on the 2-core VM a step that follows
 a sleep runs with cold caches (p50 26 us against 6 us back to back, `python -m
 silbridge.bridge.bench --paced`), which is most of the real-time jitter tail.
@@ -14,6 +19,7 @@ from __future__ import annotations
 
 import time
 
+from silbridge.shm._ring import spin_until
 from silbridge.shm.timer_slack import set_timer_slack_ns
 
 _NS = 1_000_000_000
@@ -49,10 +55,7 @@ class Pacer:
         remaining = deadline - now
         if remaining > self.spin_ns:
             time.sleep((remaining - self.spin_ns) / _NS)
-        while True:
-            now = time.monotonic_ns()
-            if now >= deadline:
-                break
+        now = spin_until(deadline)
         late = now - deadline
         if late > self.period_ns:
             self.late_steps += 1

@@ -97,6 +97,22 @@ static PyObject *mod_monotonic_ns(PyObject *Py_UNUSED(m), PyObject *Py_UNUSED(a)
     return PyLong_FromLongLong(sb_monotonic_ns());
 }
 
+/* spin_until(deadline_ns) -> now_ns: spin on CLOCK_MONOTONIC until deadline_ns with the GIL
+ * released. A real-time loop spins the last part of each period (bridge/pacing.py); spun in
+ * Python, the GIL stays with the spinner, and at --speed 6 (a period shorter than the spin)
+ * the process's MAVLink server thread waited a switch interval (5 ms) for every GIL take:
+ * its streams went out up to 3 s of sim time apart and commands took effect seconds late. */
+static PyObject *mod_spin_until(PyObject *Py_UNUSED(m), PyObject *arg)
+{
+    long long deadline = PyLong_AsLongLong(arg);
+    if (deadline == -1 && PyErr_Occurred()) return NULL;
+    int64_t now;
+    Py_BEGIN_ALLOW_THREADS
+    for (now = sb_monotonic_ns(); now < deadline; now = sb_monotonic_ns()) sb_cpu_relax();
+    Py_END_ALLOW_THREADS
+    return PyLong_FromLongLong(now);
+}
+
 static PyObject *mod_segment_bytes(PyObject *Py_UNUSED(m), PyObject *args)
 {
     unsigned long long s, a;
@@ -173,6 +189,8 @@ static PyMethodDef module_methods[] = {
      "lockstep_layout() -> dict: the lockstep word indices and values the C side uses, and "
      "where the step words and the hand-off's way of waiting live"},
     {"monotonic_ns", mod_monotonic_ns, METH_NOARGS, "CLOCK_MONOTONIC [ns], the wall_ns clock"},
+    {"spin_until", mod_spin_until, METH_O,
+     "spin_until(deadline_ns) -> now_ns: spin on CLOCK_MONOTONIC, the GIL released"},
     {"segment_bytes", mod_segment_bytes, METH_VARARGS,
      "segment_bytes(sensor_slots, actuator_slots) -> int"},
     {"probe", mod_probe, METH_O,
