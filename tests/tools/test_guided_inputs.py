@@ -73,11 +73,6 @@ def _heading(g: Gcs) -> float:
     return math.degrees(g.last["ATTITUDE"].yaw) % 360.0
 
 
-def _speed(g: Gcs) -> float:
-    p = g.last["GLOBAL_POSITION_INT"]
-    return math.hypot(p.vx, p.vy) * 0.01
-
-
 def _angle_err(a_deg: float, b_deg: float) -> float:
     return abs((a_deg - b_deg + 180.0) % 360.0 - 180.0)
 
