@@ -6,7 +6,7 @@ Deadlines are absolute (t0 + k * period / speed), so a late step does not
 push every later step back: the loop catches up, and the overrun is counted.
 
 The spin runs in C with the GIL released (shm spin_until): spun in Python it kept the GIL, and
-where the period is shorter than the spin (--speed 6 and up) the loop never let go of it; the
+where the period is no longer than the spin (--speed 5 and up) the loop never let go of it; the
 MAVLink server thread of a one-process `fly` then waited a switch interval (5 ms) for every
 take, and its streams went out up to 3 s of sim time apart (tests/bridge/test_pacing.py).
 

@@ -99,7 +99,7 @@ static PyObject *mod_monotonic_ns(PyObject *Py_UNUSED(m), PyObject *Py_UNUSED(a)
 
 /* spin_until(deadline_ns) -> now_ns: spin on CLOCK_MONOTONIC until deadline_ns with the GIL
  * released. A real-time loop spins the last part of each period (bridge/pacing.py); spun in
- * Python, the GIL stays with the spinner, and at --speed 6 (a period shorter than the spin)
+ * Python, the GIL stays with the spinner, and at --speed 5 and up (no sleep left in a period)
  * the process's MAVLink server thread waited a switch interval (5 ms) for every GIL take:
  * its streams went out up to 3 s of sim time apart and commands took effect seconds late. */
 static PyObject *mod_spin_until(PyObject *Py_UNUSED(m), PyObject *arg)

@@ -1,6 +1,6 @@
 """The real-time pacer (bridge/pacing.py) holds its deadlines and lets the process's other
 threads run while it spins: a one-process `fly --realtime` serves MAVLink on a thread of its
-own, and at --speed 6 and up the pacer spins through every period."""
+own, and at --speed 5 and up the pacer spins through every period."""
 
 from __future__ import annotations
 
