@@ -113,9 +113,13 @@ def _vel(g: Gcs, vn: float, ve: float, *, mask: int = MASK_VEL, yaw_deg: float =
         0, 1, 1, frame, mask, 0, 0, 0, vn, ve, 0, 0, 0, 0, math.radians(yaw_deg), 0)
 
 
-def _command_int(g: Gcs, cmd: int, frame: int, *p, x=0, y=0, z=0.0):
+def _send_command_int(g: Gcs, cmd: int, frame: int, *p, x=0, y=0, z=0.0) -> None:
     p = list(p) + [0.0] * (4 - len(p))
     g.m.mav.command_int_send(1, 1, frame, cmd, 0, 0, *p, x, y, z)
+
+
+def _command_int(g: Gcs, cmd: int, frame: int, *p, x=0, y=0, z=0.0):
+    _send_command_int(g, cmd, frame, *p, x=x, y=y, z=z)
     return g.wait("COMMAND_ACK", lambda a: a.command == cmd, 5.0)
 
 
@@ -239,9 +243,8 @@ def test_reposition_and_change_speed(flying):
     alt = p.relative_alt * 1e-3
     # Both sent back to back, then both acks awaited: awaiting the first ack before sending
     # the second let a busy machine's client fly seconds of the way at WPNAV_SPEED (7 m/s seen)
-    g.m.mav.command_int_send(1, 1, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-                             mav.MAV_CMD_DO_REPOSITION, 0, 0, -1, 0, 0, float("nan"),
-                             lat, lon, alt)
+    _send_command_int(g, mav.MAV_CMD_DO_REPOSITION, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+                      -1, 0, 0, float("nan"), x=lat, y=lon, z=alt)
     g.m.mav.command_long_send(1, 1, mav.MAV_CMD_DO_CHANGE_SPEED, 0, 1, 2.0, -1, 0, 0, 0, 0)
     acks = _acks(g, (mav.MAV_CMD_DO_REPOSITION, mav.MAV_CMD_DO_CHANGE_SPEED), 5.0)
     assert all(_result(a) == mav.MAV_RESULT_ACCEPTED for a in acks.values()), acks
